@@ -1,0 +1,60 @@
+"""Pair controllers for the pairflock action slot, and the paper's reproduction.
+
+    >>> from baselines import make_pair_policy
+    >>> policy = make_pair_policy("smc", env)          # eq. 28
+    >>> action, _ = policy.predict(obs["uav_0"])        # SB3's predict signature
+
+Names: ``"smc"`` (sliding mode, eq. 28), ``"proportional"`` (eq. 44), ``"zero"`` (flocking
+only). Gains are keyword arguments (``make_pair_policy("smc", env, k=200)``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from .policies import PairPolicy, ZeroPolicy, resolve_env
+from .proportional import ProportionalController
+from .sliding_mode import SlidingModeController
+
+__all__ = [
+    "POLICIES",
+    "PairPolicy",
+    "ProportionalController",
+    "SlidingModeController",
+    "ZeroPolicy",
+    "make_pair_policy",
+    "resolve_env",
+]
+
+#: name -> factory(env, **gains); a prefix entry "name:" takes the text after the colon
+POLICIES: dict[str, Callable[..., Any]] = {
+    "smc": SlidingModeController,
+    "proportional": ProportionalController,
+    "zero": ZeroPolicy,
+}
+
+
+def make_pair_policy(name: str, env: Any, **gains: Any) -> Any:
+    """Build a pair controller by name for ``env`` (any pairflock view, core or config).
+
+    The result has SB3's ``predict(observation, state=None, episode_start=None,
+    deterministic=True) -> (action, state)`` and acts per agent from that agent's
+    observation.
+    """
+    if not isinstance(name, str):
+        raise TypeError(f"name={name!r} is invalid: must be a string such as 'smc'")
+    if ":" in name:
+        prefix, arg = name.split(":", 1)
+        factory = POLICIES.get(prefix + ":")
+        if factory is None:
+            raise ValueError(
+                f"name={name!r} is invalid: unknown prefix {prefix!r}; valid: "
+                f"{', '.join(sorted(POLICIES))}"
+            )
+        return factory(arg, env, **gains)
+    if name not in POLICIES:
+        raise ValueError(
+            f"name={name!r} is invalid: must be one of {', '.join(sorted(POLICIES))}"
+        )
+    return POLICIES[name](env, **gains)

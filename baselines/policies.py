@@ -1,0 +1,82 @@
+"""The common shape of every pair controller: SB3's ``predict`` over named observations."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from pairflock_env import ObsLayout, PairFlockConfig
+
+__all__ = ["PairPolicy", "ZeroPolicy", "resolve_env"]
+
+
+def resolve_env(env: Any) -> tuple[PairFlockConfig, ObsLayout]:
+    """(config, observation layout) of any pairflock view, core, or a bare config."""
+    if isinstance(env, PairFlockConfig):
+        return env, ObsLayout(env.dim, env.obs_neighbors)
+    for obj in (env, getattr(env, "unwrapped", None), getattr(env, "core", None)):
+        cfg = getattr(obj, "config", None)
+        layout = getattr(obj, "layout", None)
+        if isinstance(cfg, PairFlockConfig) and isinstance(layout, ObsLayout):
+            return cfg, layout
+    raise TypeError(
+        f"env={env!r} is invalid: expected a pairflock env, core or PairFlockConfig "
+        "(an object with .config and .layout)"
+    )
+
+
+class PairPolicy:
+    """A per-agent pair controller with stable-baselines3's ``predict`` signature.
+
+    Subclasses implement :meth:`accel` (pairwise acceleration f^x_i in m/s^2, world frame)
+    from a batch of observations; ``predict`` turns it into the env's normalised action
+    (units of ``pair_accel_limit``). The env clips, so every controller is treated alike.
+    """
+
+    #: gain name -> (default, description); subclasses fill this in
+    GAINS: dict[str, tuple[Any, str]] = {}
+
+    def __init__(self, env: Any, **gains: Any) -> None:
+        self.config, self.layout = resolve_env(env)
+        unknown = sorted(set(gains) - set(self.GAINS))
+        if unknown:
+            valid = ", ".join(self.GAINS) or "none"
+            raise ValueError(
+                f"unknown gain(s) {unknown} for {type(self).__name__}; valid gains: {valid}"
+            )
+        self.gains = {k: gains.get(k, self._default(k)) for k in self.GAINS}
+
+    def _default(self, name: str) -> Any:
+        return self.GAINS[name][0]
+
+    def accel(self, obs: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
+        """Action(s) for one observation (obs_size,) or a batch (n, obs_size)."""
+        obs = np.asarray(observation, dtype=np.float64)
+        if obs.ndim not in (1, 2) or obs.shape[-1] != self.layout.size:
+            raise ValueError(
+                f"observation has shape {obs.shape}; expected ({self.layout.size},) or "
+                f"(n, {self.layout.size})"
+            )
+        u = self.accel(obs)
+        return (u / self.config.pair_accel_limit).astype(np.float32), state
+
+    def __repr__(self) -> str:
+        g = ", ".join(f"{k}={v!r}" for k, v in self.gains.items())
+        return f"{type(self).__name__}({g})"
+
+
+class ZeroPolicy(PairPolicy):
+    """No pair term: the paired UAVs fly the flocking protocol only."""
+
+    def accel(self, obs: np.ndarray) -> np.ndarray:
+        return np.zeros(obs.shape[:-1] + (self.config.dim,))

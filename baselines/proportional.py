@@ -1,0 +1,34 @@
+"""The proportional "normal method" of eq. 44 (Sec. VI-A), the paper's comparison.
+
+    f_i^x = k_p (d_m - ||q_i - q_j||) sign(q_i - q_j)      (element-wise sign; erratum 6)
+
+From UAV i's own observation, q_i - q_j = -(partner offset).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .policies import PairPolicy
+
+__all__ = ["ProportionalController"]
+
+
+class ProportionalController(PairPolicy):
+    GAINS = {"k_p": (1.0, "proportional gain k_p (1/s^2); the paper does not state it")}
+
+    def __init__(self, env: Any, **gains: Any) -> None:
+        super().__init__(env, **gains)
+        k = float(self.gains["k_p"])
+        if not np.isfinite(k) or k <= 0:
+            raise ValueError(f"k_p={self.gains['k_p']!r} is invalid: must be a finite number > 0")
+        self.gains["k_p"] = k
+
+    def accel(self, obs: np.ndarray) -> np.ndarray:
+        L = self.layout
+        y = L.get(obs, "partner_offset")
+        dm = L.get(obs, "target_distance")
+        dist = np.linalg.norm(y, axis=-1, keepdims=True)
+        return self.gains["k_p"] * (dm - dist) * np.sign(-y)

@@ -1,0 +1,174 @@
+"""Batched episode rollouts of any pair policy, with recorded time series and metrics.
+
+One rollout runs every seed of a (config, policy) combination as one batched core (swarm b
+seeded with ``seeds[b]``, identical to a PettingZoo env reset with that seed), asks the
+policy for all agents' actions at once through ``predict``, and records what the metrics and
+figures need. The reproduction, the benchmark and the training evaluation all call this.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from pairflock_env import PairFlockConfig, PairFlockCore
+from pairflock_env.metrics import pair_episode_metrics
+
+__all__ = ["Trace", "rollout", "trace_metrics"]
+
+
+@dataclasses.dataclass
+class Trace:
+    """Time series of a batched rollout (B swarms, P pairs, M = 2P agents, T control steps)."""
+
+    config: PairFlockConfig
+    seeds: list[int]
+    t: np.ndarray  # (T+1,)
+    pair_error: np.ndarray  # (B, P, T+1)
+    pair_distance: np.ndarray  # (B, P, T+1)
+    surface: np.ndarray  # (B, P, T+1)
+    min_separation: np.ndarray  # (B, M, T+1)
+    speed: np.ndarray  # (B, M, T+1)
+    u: np.ndarray  # (B, M, T, dim) applied pair acceleration, m/s^2
+    largest_component: np.ndarray  # (B, T+1)
+    velocity_mismatch: np.ndarray  # (B, T+1)
+    collisions: np.ndarray  # (B, T+1)
+    clipped_steps: np.ndarray  # (B, M)
+    ended: np.ndarray  # (B,) control steps actually run (early termination < T)
+    positions: dict[int, np.ndarray]  # row -> (T+1, N, dim), only for recorded rows
+    velocities: dict[int, np.ndarray]
+    leader_positions: dict[int, np.ndarray]  # row -> (T+1, dim)
+
+    @property
+    def num_swarms(self) -> int:
+        return self.pair_error.shape[0]
+
+
+def rollout(
+    config: PairFlockConfig,
+    policy: Any,
+    seeds: Sequence[int],
+    *,
+    record_rows: Sequence[int] = (),
+    steps: int | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> Trace:
+    """Run one episode per seed, all swarms in one batched core.
+
+    Args:
+        config: the task.  policy: anything with SB3's ``predict`` (analytic or learned).
+        seeds: one seed per swarm.  record_rows: swarms whose full state is kept for figures.
+        steps: control steps (default: the episode length).  progress: called with the number
+            of steps done since the last call.
+    """
+    seeds = [int(s) for s in seeds]
+    core = PairFlockCore(config, num_envs=len(seeds))
+    B, M, D = len(seeds), core.n_agents, config.dim
+    P = M // 2
+    T = config.episode_steps if steps is None else int(steps)
+    res = core.reset(seed=seeds)
+    ia = core.agent_uavs
+    pair_rows = np.arange(0, M, 2)
+
+    tr = Trace(
+        config=config,
+        seeds=seeds,
+        t=np.arange(T + 1) * config.dt,
+        pair_error=np.empty((B, P, T + 1)),
+        pair_distance=np.empty((B, P, T + 1)),
+        surface=np.empty((B, P, T + 1)),
+        min_separation=np.empty((B, M, T + 1)),
+        speed=np.empty((B, M, T + 1)),
+        u=np.zeros((B, M, T, D)),
+        largest_component=np.empty((B, T + 1), np.int64),
+        velocity_mismatch=np.empty((B, T + 1)),
+        collisions=np.empty((B, T + 1), np.int64),
+        clipped_steps=np.zeros((B, M), np.int64),
+        ended=np.full(B, T, np.int64),
+        positions={int(r): np.empty((T + 1, config.n_uavs, D)) for r in record_rows},
+        velocities={int(r): np.empty((T + 1, config.n_uavs, D)) for r in record_rows},
+        leader_positions={int(r): np.empty((T + 1, D)) for r in record_rows},
+    )
+    done = np.zeros(B, bool)
+
+    def record(k: int, res, live: np.ndarray) -> None:
+        info = res.info
+        for name, key in (("pair_error", "pair_error"), ("pair_distance", "pair_distance"),
+                          ("surface", "sliding_surface")):  # fmt: skip
+            getattr(tr, name)[live, :, k] = info[key][live][:, pair_rows]
+        tr.min_separation[live, :, k] = info["min_separation"][live]
+        tr.speed[live, :, k] = np.linalg.norm(core.p[live][:, ia], axis=-1)
+        tr.largest_component[live, k] = info["largest_component"][live]
+        tr.velocity_mismatch[live, k] = info["velocity_mismatch"][live]
+        tr.collisions[live, k] = info["collisions"][live]
+        if tr.positions:
+            lq, _ = core.leader_state()
+            for r in tr.positions:
+                if live[r]:
+                    tr.positions[r][k] = core.q[r]
+                    tr.velocities[r][k] = core.p[r]
+                    tr.leader_positions[r][k] = lq[r]
+
+    record(0, res, ~done)
+    limit = config.pair_accel_limit
+    report_every = max(1, T // 50)
+    last_report = 0
+    for k in range(1, T + 1):
+        obs = res.obs.reshape(B * M, -1)
+        actions, _ = policy.predict(obs, deterministic=True)
+        actions = np.asarray(actions, dtype=np.float64).reshape(B, M, D)
+        res = core.step(actions)
+        live = ~done
+        tr.u[live, :, k - 1] = np.clip(actions[live], -1.0, 1.0) * limit
+        tr.clipped_steps[live] += res.info["action_clipped"][live]
+        record(k, res, live)
+        ended_now = live & (res.terminated | res.truncated)
+        if k < T and ended_now.any():
+            # freeze the finished swarms' series at their last value
+            tr.ended[ended_now] = k
+            done |= ended_now
+        if progress is not None and (k - last_report >= report_every or k == T):
+            progress(k - last_report)
+            last_report = k
+        if done.all():
+            break
+    for b in np.flatnonzero(tr.ended < T):
+        e = tr.ended[b]
+        for arr in (tr.pair_error, tr.pair_distance, tr.surface, tr.min_separation, tr.speed):
+            arr[b, ..., e + 1 :] = arr[b, ..., e : e + 1]
+        for arr in (tr.largest_component, tr.velocity_mismatch, tr.collisions):
+            arr[b, e + 1 :] = arr[b, e]
+    if progress is not None and last_report < T:
+        progress(T - last_report)
+    return tr
+
+
+def trace_metrics(tr: Trace, **kwargs: Any) -> list[dict[str, Any]]:
+    """Metrics of every (swarm, pair) of a trace, one dict each (with ``seed`` and ``pair``)."""
+    cfg = tr.config
+    out = []
+    for b in range(tr.num_swarms):
+        for k in range(tr.pair_error.shape[1]):
+            ms = slice(2 * k, 2 * k + 2)
+            m = pair_episode_metrics(
+                tr.t,
+                tr.pair_error[b, k],
+                tr.surface[b, k],
+                tr.min_separation[b, ms],
+                tr.u[b, ms],
+                tr.speed[b, ms],
+                tr.largest_component[b],
+                tr.velocity_mismatch[b],
+                tr.collisions[b],
+                cfg.dt,
+                cfg.collision_distance,
+                **kwargs,
+            )
+            m = {"seed": tr.seeds[b], "pair": k, **m,
+                 "clipped_steps": int(tr.clipped_steps[b, ms].sum()),
+                 "steps_run": int(tr.ended[b])}  # fmt: skip
+            out.append(m)
+    return out

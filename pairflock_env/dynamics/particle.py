@@ -1,0 +1,43 @@
+"""The particle model of eq. 1: a double integrator q' = p, p' = u."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..config import PairFlockConfig
+
+__all__ = ["ParticleModel"]
+
+
+class ParticleModel:
+    """Double integrator under a held acceleration.
+
+    ``integrator="semi_implicit"`` (symplectic Euler, the paper's): per physics step h,
+    p <- p + u h, then q <- q + p h. ``integrator="exact"``: q <- q + p h + u h^2 / 2,
+    p <- p + u h, the exact solution for a constant u (substeps then change nothing).
+    """
+
+    name = "particle"
+
+    def __init__(self, config: PairFlockConfig, num_envs: int) -> None:
+        self.h = config.physics_dt
+        self.substeps = config.substeps
+        self.exact = config.integrator == "exact"
+
+    def reset_rows(self, rows: np.ndarray, q: np.ndarray, p: np.ndarray) -> None:
+        pass
+
+    def advance(self, q: np.ndarray, p: np.ndarray, a_des: np.ndarray) -> None:
+        h = self.h
+        if self.exact:
+            T = h * self.substeps
+            q += p * T + (0.5 * T * T) * a_des
+            p += a_des * T
+            return
+        dv = a_des * h
+        for _ in range(self.substeps):
+            p += dv
+            q += p * h
+
+    def info(self) -> dict[str, np.ndarray]:
+        return {}

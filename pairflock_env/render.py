@@ -1,0 +1,184 @@
+"""Paper-style swarm pictures with matplotlib, headless by default.
+
+UAVs are triangles pointing along their velocity (Figs. 4-15), paired UAVs are drawn in
+colour inside a circle of radius d_m around the pair's midpoint, and the virtual leader is a
+star. ``rgb_array`` frames are drawn on an off-screen Agg canvas, so no display is needed;
+``human`` mode opens a pyplot window when an interactive backend is available.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+__all__ = ["SwarmRenderer", "draw_swarm", "triangle_markers", "PAIR_COLORS"]
+
+PAIR_COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown")
+UNPAIRED_COLOR = "0.35"
+
+
+def triangle_markers(xy: np.ndarray, heading: np.ndarray, size: float) -> np.ndarray:
+    """Vertices (n, 3, 2) of isosceles triangles at ``xy`` (n, 2) pointing along ``heading``
+    (n,) radians; ``size`` is the triangle's length in data units."""
+    c, s = np.cos(heading), np.sin(heading)
+    local = np.array([[0.6, 0.0], [-0.4, 0.3], [-0.4, -0.3]]) * size  # tip first
+    rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)  # (n, 2, 2)
+    return xy[:, None, :] + np.einsum("nij,vj->nvi", rot, local)
+
+
+def _headings(p: np.ndarray, prev: np.ndarray | None) -> np.ndarray:
+    speed = np.linalg.norm(p[:, :2], axis=1)
+    h = np.arctan2(p[:, 1], p[:, 0])
+    if prev is not None:
+        h = np.where(speed > 1e-6, h, prev)
+    else:
+        h = np.where(speed > 1e-6, h, math.pi / 2)
+    return h
+
+
+def draw_swarm(
+    ax,
+    q: np.ndarray,
+    p: np.ndarray,
+    pairs,
+    d_m,
+    leader_q: np.ndarray | None = None,
+    *,
+    headings: np.ndarray | None = None,
+    size: float | None = None,
+    arrows: bool = False,
+    limits: tuple[float, float, float, float] | None = None,
+    title: str | None = None,
+) -> np.ndarray:
+    """Draw one swarm snapshot (x-y plane) on a matplotlib Axes; returns the headings used.
+
+    Args:
+        q, p: positions and velocities (N, dim); only x and y are drawn.
+        pairs: sequence of (A, B) UAV indices; d_m: one distance per pair.
+        leader_q: leader position (dim,) or None.
+        headings: previous headings, kept for UAVs at rest.
+        size: triangle length in data units (default: 2.5 % of the view).
+        arrows: draw velocity arrows (Figs. 5, 9, 12).
+        limits: (xmin, xmax, ymin, ymax); default fits every UAV and the leader.
+    """
+    from matplotlib.collections import PolyCollection
+    from matplotlib.patches import Circle
+
+    q = np.asarray(q, dtype=float)
+    p = np.asarray(p, dtype=float)
+    xy = q[:, :2]
+    if limits is None:
+        pts = xy if leader_q is None else np.vstack([xy, np.asarray(leader_q)[None, :2]])
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        span = max(float(np.max(hi - lo)), 10.0)
+        mid = (lo + hi) / 2
+        half = 0.55 * span + 2.0
+        limits = (mid[0] - half, mid[0] + half, mid[1] - half, mid[1] + half)
+    span = max(limits[1] - limits[0], limits[3] - limits[2])
+    if size is None:
+        size = 0.025 * span
+    h = _headings(p, headings)
+    tris = triangle_markers(xy, h, size)
+    n = len(q)
+    colors = [UNPAIRED_COLOR] * n
+    d_m = np.broadcast_to(np.asarray(d_m, dtype=float), (len(pairs),))
+    for k, (a, b) in enumerate(pairs):
+        colors[a] = colors[b] = PAIR_COLORS[k % len(PAIR_COLORS)]
+    ax.add_collection(PolyCollection(tris, facecolors=colors, edgecolors="k", linewidths=0.3))
+    for k, (a, b) in enumerate(pairs):
+        color = PAIR_COLORS[k % len(PAIR_COLORS)]
+        if np.linalg.norm(xy[a] - xy[b]) <= 2 * d_m[k]:
+            # the paper's marker: one circle of radius d_m around the converged pair
+            ax.add_patch(Circle((xy[a] + xy[b]) / 2, d_m[k], fill=False, lw=1.2, color=color))
+        else:
+            for i in (a, b):  # still apart: circle each member
+                ax.add_patch(Circle(xy[i], d_m[k], fill=False, lw=1.2, color=color))
+    if arrows:
+        ax.quiver(xy[:, 0], xy[:, 1], p[:, 0], p[:, 1], color="0.5", width=0.002,
+                  angles="xy", scale_units="xy", scale=0.2)  # fmt: skip
+    if leader_q is not None:
+        lq = np.asarray(leader_q, dtype=float)
+        ax.plot(lq[0], lq[1], marker="*", ms=14, color="gold", mec="k", mew=0.8, ls="none",
+                label="virtual leader")  # fmt: skip
+    ax.set_xlim(limits[0], limits[1])
+    ax.set_ylim(limits[2], limits[3])
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.grid(True, lw=0.3, alpha=0.5)
+    if title:
+        ax.set_title(title, fontsize=10)
+    return h
+
+
+class SwarmRenderer:
+    """Renders one swarm of a core as an RGB array or in a pyplot window."""
+
+    def __init__(self, pairs, d_m, render_mode: str | None, size_px: tuple[int, int] = (640, 640)):
+        self.pairs = tuple(pairs)
+        self.d_m = d_m
+        self.render_mode = render_mode
+        self.size_px = size_px
+        self._headings: np.ndarray | None = None
+        self._fig = None
+        self._window = None
+
+    def reset(self) -> None:
+        self._headings = None
+
+    def _figure(self):
+        from matplotlib.figure import Figure
+
+        if self._fig is None:
+            dpi = 100
+            self._fig = Figure(figsize=(self.size_px[0] / dpi, self.size_px[1] / dpi), dpi=dpi)
+        self._fig.clear()
+        return self._fig
+
+    def rgb_array(self, q, p, leader_q, title: str | None = None) -> np.ndarray:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        fig = self._figure()
+        canvas = FigureCanvasAgg(fig)
+        ax = fig.add_subplot(1, 1, 1)
+        self._headings = draw_swarm(
+            ax, q, p, self.pairs, self.d_m, leader_q, headings=self._headings, title=title
+        )
+        fig.tight_layout()
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+
+    def human(self, q, p, leader_q, title: str | None = None) -> None:
+        import matplotlib
+        import matplotlib.pyplot as plt
+
+        backend = matplotlib.get_backend().lower()
+        if "agg" in backend or backend in ("pdf", "svg", "ps", "cairo", "template"):
+            if self._window is None:
+                warnings.warn(
+                    f'render_mode="human" needs an interactive matplotlib backend (current: '
+                    f'{backend}); nothing is shown. Use render_mode="rgb_array" when headless.',
+                    stacklevel=3,
+                )
+                self._window = False
+            return
+        if not self._window:
+            self._window = plt.figure(figsize=(6.4, 6.4))
+        fig = self._window
+        fig.clear()
+        ax = fig.add_subplot(1, 1, 1)
+        self._headings = draw_swarm(
+            ax, q, p, self.pairs, self.d_m, leader_q, headings=self._headings, title=title
+        )
+        fig.canvas.draw_idle()
+        plt.pause(0.001)
+
+    def close(self) -> None:
+        if self._window:
+            import matplotlib.pyplot as plt
+
+            plt.close(self._window)
+        self._window = None
+        self._fig = None
