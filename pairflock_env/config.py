@@ -146,6 +146,18 @@ class PairFlockConfig:
     obs_neighbors: int = 6
     """Number K of nearest non-partner UAVs in each agent's observation."""
 
+    # --- robustness (what the paper's proofs assume away) ---------------------------------
+    obs_noise_position: float = 0.0
+    """Std (m) of white Gaussian noise on the observed partner offset y, per axis and step."""
+    obs_noise_velocity: float = 0.0
+    """Std (m/s) of white Gaussian noise on the observed relative velocity y'."""
+    partner_delay: int = 0
+    """Communication delay, in control steps, of the partner's state (position, velocity,
+    flocking command) as each agent sees it."""
+    disturbance_std: float = 0.0
+    """Std (m/s^2) of a random acceleration added to every UAV's command, per axis, drawn
+    each control period and held over it."""
+
     # ------------------------------------------------------------------------------------
     def __post_init__(self) -> None:
         _validate(self)
@@ -402,6 +414,9 @@ def _validate(cfg: PairFlockConfig) -> None:
         _as_float("divergence_limit", cfg.divergence_limit, positive=True),
     )
     _set(cfg, "obs_neighbors", _as_int("obs_neighbors", cfg.obs_neighbors, 0))
+    for name in ("obs_noise_position", "obs_noise_velocity", "disturbance_std"):
+        _set(cfg, name, _as_float(name, getattr(cfg, name), nonneg=True))
+    _set(cfg, "partner_delay", _as_int("partner_delay", cfg.partner_delay, 0))
 
 
 # ---------------------------------------------------------------------------------------

@@ -131,7 +131,13 @@ class PairFlockCore:
         self._pinned = np.zeros((B, N))
         self._flock_out: dict[str, np.ndarray] | None = None
         self._pair_out: dict[str, np.ndarray] | None = None
-        self._obs = np.zeros((B, 2 * len(pairs), self.layout.size), np.float32)
+        M = 2 * len(pairs)
+        self._obs = np.zeros((B, M, self.layout.size), np.float32)
+        self._partner_col = np.arange(M) ^ 1  # agent column of each agent's partner
+        # ring buffer of the agents' (q, p, flocking command) for the partner delay
+        H = cfg.partner_delay + 1
+        self._hist = np.zeros((3, H, B, M, D)) if cfg.partner_delay else None
+        self._hist_pos = 0
         self._is_reset = np.zeros(B, bool)
         self._rngs: list[np.random.Generator] = [
             g if g is not None else np.random.default_rng() for g in self._make_rngs(seed, B)
@@ -266,7 +272,7 @@ class PairFlockCore:
         self.vehicle.reset_rows(rows, self.q, self.p)
         self._is_reset[rows] = True
         zeros_u = np.zeros((B, self.n_agents, D))
-        res = self._refresh(zeros_u, np.zeros((B, self.n_agents), bool), keep_obs=self._obs)
+        res = self._refresh(zeros_u, np.zeros((B, self.n_agents), bool), reset_rows=rows)
         res.reward[rows] = 0.0
         res.terminated[rows] = False
         res.truncated[rows] = False
@@ -381,10 +387,16 @@ class PairFlockCore:
         u = np.clip(a, -1.0, 1.0) * self.config.pair_accel_limit
         a_des = self._flock_out["acc"].copy()
         a_des[:, self.agent_uavs] += u
+        if self.config.disturbance_std > 0:
+            a_des += self.config.disturbance_std * self._draw_normal(a_des.shape[1:])
         self.vehicle.advance(self.q, self.p, a_des)
         self.steps += 1
         np.multiply(self.steps, self.config.dt, out=self.t)  # no drift from repeated sums
-        return self._refresh(u, clipped, keep_obs=self._obs)
+        return self._refresh(u, clipped)
+
+    def _draw_normal(self, shape: tuple[int, ...]) -> np.ndarray:
+        """Standard normal draws (B, *shape), swarm b from its own generator."""
+        return np.stack([g.standard_normal(shape) for g in self._rngs])
 
     def _require_reset(self) -> None:
         if not self._is_reset.all():
@@ -392,7 +404,9 @@ class PairFlockCore:
             raise RuntimeError(f"call reset() before step(): swarms {rows} were never reset")
 
     # ------------------------------------------------------------------ observation etc.
-    def _refresh(self, u: np.ndarray, clipped: np.ndarray, keep_obs: np.ndarray | None) -> StepResult:
+    def _refresh(
+        self, u: np.ndarray, clipped: np.ndarray, reset_rows: np.ndarray | None = None
+    ) -> StepResult:
         cfg = self.config
         q, p = self.q, self.p
         lq, lp = self._leader.state(self.t)
@@ -414,19 +428,37 @@ class PairFlockCore:
         shared = pp["shared"][:, self.agent_pair]
         diverged = fl["diverged"]
 
+        # what the agents perceive of their partner: delayed and/or noisy
+        acc = fl["acc"]
+        acc_partner = acc[:, ip]
+        off_obs, vel_obs = off, vel
+        if self._hist is not None:
+            H = self._hist.shape[1]
+            if reset_rows is None:
+                self._hist_pos = (self._hist_pos + 1) % H
+            now = np.stack([qa, pa, acc[:, ia]])  # (3, B, M, D)
+            self._hist[:, self._hist_pos] = now
+            if reset_rows is not None:  # a fresh episode has no older samples
+                self._hist[:, :, reset_rows] = now[:, None, reset_rows]
+            old = self._hist[:, (self._hist_pos + 1) % H][:, :, self._partner_col]
+            off_obs, vel_obs, acc_partner = old[0] - qa, old[1] - pa, old[2]
+        if cfg.obs_noise_position > 0 or cfg.obs_noise_velocity > 0:
+            z = self._draw_normal((2,) + off.shape[1:])
+            off_obs = off_obs + cfg.obs_noise_position * z[:, 0]
+            vel_obs = vel_obs + cfg.obs_noise_velocity * z[:, 1]
+
         # observation, field by field (names from the layout)
         B, M = qa.shape[:2]
         obs = np.empty((B, M, self.layout.size), np.float32)
-        acc = fl["acc"]
         sl = self.layout.slice
-        obs[..., sl("partner_offset")] = off
-        obs[..., sl("partner_velocity")] = vel
+        obs[..., sl("partner_offset")] = off_obs
+        obs[..., sl("partner_velocity")] = vel_obs
         obs[..., sl("target_distance")] = self._agent_dm[None, :, None]
         obs[..., sl("shared_neighbors")] = shared[..., None]
         obs[..., sl("leader_offset")] = lq[:, None, :] - qa
         obs[..., sl("leader_velocity")] = lp[:, None, :] - pa
         obs[..., sl("flock_accel")] = acc[:, ia]
-        obs[..., sl("partner_flock_accel")] = acc[:, ip]
+        obs[..., sl("partner_flock_accel")] = acc_partner
         if cfg.obs_neighbors:
             obs[..., sl("neighbor_offsets")] = pp["nbr_pos"].reshape(B, M, -1)
             obs[..., sl("neighbor_velocities")] = pp["nbr_vel"].reshape(B, M, -1)
@@ -434,14 +466,17 @@ class PairFlockCore:
         # a diverged swarm keeps its last finite observation
         bad_obs = diverged | ~np.isfinite(obs).all(axis=(1, 2))
         if bad_obs.any():
-            obs[bad_obs] = 0.0 if keep_obs is None else keep_obs[bad_obs]
+            obs[bad_obs] = self._obs[bad_obs]
             diverged = diverged | bad_obs
         self._obs = obs
 
         terms = reward_terms(cfg, err, u, min_sep)
         reward = terms["error"] + terms["effort"] + terms["separation"] + terms["collision"]
         reward[diverged] = -DIVERGENCE_PENALTY
+        vinfo = self.vehicle.info()
         terminated = diverged.copy()
+        if "vehicle_terminated" in vinfo:  # e.g. a crashed quadrotor
+            terminated |= vinfo["vehicle_terminated"]
         if cfg.terminate_on_collision:
             terminated |= np.any(min_sep < cfg.collision_distance, axis=1)
         truncated = (self.steps >= cfg.episode_steps) & ~terminated
@@ -464,6 +499,7 @@ class PairFlockCore:
         }
         for k, v in terms.items():
             info[f"reward_{k}"] = v
+        info.update(vinfo)
         return StepResult(obs, reward, terminated, truncated, info)
 
     def observe(self) -> np.ndarray:

@@ -212,8 +212,9 @@ class PairFlockParallelEnv(ParallelEnv):
         return obs, rewards, terminations, truncations, infos
 
     def _infos(self, info: dict[str, np.ndarray]) -> dict[str, dict[str, Any]]:
-        swarm = {k: info[k][0].item() for k in SWARM_INFO_KEYS}
-        per_agent = {k: v[0].tolist() for k, v in info.items() if k not in swarm}
+        # (B,) arrays are swarm-level, (B, M) arrays per agent, (B, ...) anything else
+        swarm = {k: v[0].item() for k, v in info.items() if v.ndim == 1}
+        per_agent = {k: v[0].tolist() for k, v in info.items() if v.ndim == 2}
         out = {}
         for m, a in enumerate(self.possible_agents):
             d = {k: v[m] for k, v in per_agent.items()}

@@ -1,0 +1,37 @@
+"""Shared fixtures. Tests that hold for every vehicle model take the ``dynamics`` fixture."""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import pytest  # noqa: E402
+
+from pairflock_env import make_config  # noqa: E402
+
+#: every vehicle model the env offers; tests over ``dynamics`` run once per entry
+DYNAMICS = ["particle"]
+
+#: a small, fast task per vehicle model (same task, both vehicles)
+SMALL = {
+    "particle": dict(preset="paper", n_uavs=12),
+}
+
+
+@pytest.fixture(params=DYNAMICS)
+def dynamics(request) -> str:
+    return request.param
+
+
+@pytest.fixture
+def small_kwargs(dynamics) -> dict:
+    """Keyword arguments of a small env of the given vehicle model."""
+    return dict(SMALL[dynamics])
+
+
+@pytest.fixture
+def small_config(small_kwargs):
+    kw = dict(small_kwargs)
+    return make_config(kw.pop("preset"), **kw)
