@@ -54,7 +54,11 @@ def make_pair_policy(name: str, env: Any, **gains: Any) -> Any:
             )
         return factory(arg, env, **gains)
     if name not in POLICIES:
+        import difflib
+
+        hint = difflib.get_close_matches(name, list(POLICIES), n=1)
+        extra = f" (did you mean {hint[0]!r}?)" if hint else ""
         raise ValueError(
-            f"name={name!r} is invalid: must be one of {', '.join(sorted(POLICIES))}"
+            f"name={name!r} is invalid{extra}: must be one of {', '.join(sorted(POLICIES))}"
         )
     return POLICIES[name](env, **gains)

@@ -390,7 +390,7 @@ def _validate(cfg: PairFlockConfig) -> None:
             "init",
             cfg.init,
             f'"corners" places at most {2 ** (cfg.dim - 1)} pairs in {cfg.dim}-D '
-            f'(one per diagonal); use init="random" for {len(norm)} pairs',
+            f'(one per diagonal): with {len(norm)} pairs init must be "random"',
         )
 
     for name in (

@@ -117,8 +117,6 @@ class PairFlockCore:
         self.agent_pair = np.repeat(np.arange(len(pairs)), 2)  # (M,) pair index of each agent
         self.partner_of = np.full(N, -1, np.int64)
         self.partner_of[self.agent_uavs] = self.partner_uavs
-        unpaired = np.setdiff1d(np.arange(N), self.agent_uavs)
-        self._unpaired = unpaired if unpaired.size else np.arange(N)
         self._agent_dm = cfg.d_m_array[self.agent_pair]  # (M,)
 
         self._params = FlockingParams(cfg)
@@ -481,7 +479,6 @@ class PairFlockCore:
             terminated |= np.any(min_sep < cfg.collision_distance, axis=1)
         truncated = (self.steps >= cfg.episode_steps) & ~terminated
 
-        vmis = np.linalg.norm(p[:, self._unpaired] - lp[:, None, :], axis=-1)
         info = {
             "pair_distance": dist,
             "pair_error": err,
@@ -493,8 +490,8 @@ class PairFlockCore:
             "sim_time": self.t.copy(),
             "collisions": fl["collisions"].copy(),
             "largest_component": fl["largest_component"].copy(),
-            "velocity_mismatch": vmis.mean(axis=1),
-            "velocity_mismatch_max": vmis.max(axis=1),
+            "velocity_mismatch": fl["velocity_mismatch"].copy(),
+            "velocity_mismatch_max": fl["velocity_mismatch_max"].copy(),
             "diverged": diverged,
         }
         for k, v in terms.items():

@@ -12,7 +12,8 @@ For every UAV i of every swarm b (arrays shaped (B, N, dim)):
 The same sweep also yields what metrics and rewards need, so no second pass over the pairs
 is made: each UAV's smallest distance to any UAV other than its partner, the number of UAV
 pairs closer than the collision distance, the size of the largest connected component of
-the interaction graph (union-find), and a per-swarm flag for non-finite or runaway states.
+the interaction graph (union-find), the velocity mismatch to the leader, and a per-swarm
+flag for non-finite or runaway states.
 
 This is the only implementation of these equations; every view and vehicle model calls it.
 The kernels run single-threaded under numba (one JIT-compiled function per dtype signature;
@@ -49,10 +50,30 @@ class FlockingParams:
 @njit(cache=True, nogil=True)
 def _flocking_kernel(
     q, p, ql, pl, h, partner, a, b_r, inv_s2, r2, cons, c1, c2, coll2, limit,
-    acc, min_d2, n_coll, lcc, bad, parent, size,
+    acc, min_d2, n_coll, lcc, bad, vmis, vmax, parent, size,
 ):  # fmt: skip
     B, N, D = q.shape
+    n_unpaired = 0
+    for i in range(N):
+        if partner[i] < 0:
+            n_unpaired += 1
     for b in range(B):
+        # velocity mismatch to the leader over the unpaired UAVs (all UAVs if none)
+        vsum = 0.0
+        vm = 0.0
+        for i in range(N):
+            if n_unpaired > 0 and partner[i] >= 0:
+                continue
+            v2 = 0.0
+            for k in range(D):
+                dv = p[b, i, k] - pl[b, k]
+                v2 += dv * dv
+            v = np.sqrt(v2)
+            vsum += v
+            if v > vm:
+                vm = v
+        vmis[b] = vsum / (n_unpaired if n_unpaired > 0 else N)
+        vmax[b] = vm
         # divergence check and pinning term (eq. 19)
         is_bad = False
         for i in range(N):
@@ -133,7 +154,9 @@ def flocking_pass(
     Returns:
         dict with ``acc`` (B, N, dim) m/s^2, ``min_d2`` (B, N) squared distance to the nearest
         non-partner UAV, ``collisions`` (B,) int, ``largest_component`` (B,) int,
-        ``diverged`` (B,) bool.
+        ``diverged`` (B,) bool, ``velocity_mismatch`` / ``velocity_mismatch_max`` (B,) mean
+        and max of ||p_i - p_leader|| over the unpaired UAVs (all UAVs when every UAV is
+        paired). Per-swarm sums run sequentially, so results do not depend on B.
     """
     B, N, D = q.shape
     if out is None or out["acc"].shape != q.shape:
@@ -143,6 +166,8 @@ def flocking_pass(
             "collisions": np.empty(B, np.int64),
             "largest_component": np.empty(B, np.int64),
             "diverged": np.empty(B, np.bool_),
+            "velocity_mismatch": np.empty(B),
+            "velocity_mismatch_max": np.empty(B),
             "_parent": np.empty(N, np.int64),
             "_size": np.empty(N, np.int64),
         }
@@ -151,7 +176,8 @@ def flocking_pass(
         q, p, leader_q, leader_p, pinned, partner,
         pr.a, pr.b_r, pr.inv_sigma2, pr.r2, pr.consensus, pr.c1, pr.c2, pr.coll2, pr.limit,
         out["acc"], out["min_d2"], out["collisions"], out["largest_component"],
-        out["diverged"], out["_parent"], out["_size"],
+        out["diverged"], out["velocity_mismatch"], out["velocity_mismatch_max"],
+        out["_parent"], out["_size"],
     )  # fmt: skip
     return out
 

@@ -20,7 +20,7 @@ METRIC_DOCS: dict[str, tuple[str, str]] = {
     "pair_collision_steps": ("steps", "control steps with that distance < collision_distance"),
     "peak_accel": ("m/s^2", "largest applied pair acceleration ||u|| of either member"),
     "effort": ("m^2/s^3", "integral of ||u||^2 dt, summed over both members"),
-    "chattering": ("m/s^3", "total variation of u per second, mean of both members"),
+    "chattering": ("m/s^3", "total variation of u per second over the last 10 s, mean of both members"),
     "peak_speed": ("m/s", "largest speed of either member"),
     "final_largest_component": ("UAVs", "largest connected component of the swarm at the end"),
     "final_velocity_mismatch": ("m/s", "mean ||p_i - p_leader|| of unpaired UAVs at the end"),
@@ -73,9 +73,10 @@ def pair_episode_metrics(
     s = np.abs(surface)
     steady = t >= t[-1] - steady_window + 1e-9
     un = np.linalg.norm(u, axis=-1)  # (2, T-1)
-    if u.shape[1] > 1:
-        tv = np.linalg.norm(np.diff(u, axis=1), axis=-1).sum(axis=1)
-        chatter = float(np.mean(tv) / (dt * u.shape[1]))
+    u_steady = u[:, steady[1:]]  # u[:, k] is held over (t[k], t[k+1]]
+    if u_steady.shape[1] > 1:
+        tv = np.linalg.norm(np.diff(u_steady, axis=1), axis=-1).sum(axis=1)
+        chatter = float(np.mean(tv) / (dt * (u_steady.shape[1] - 1)))
     else:
         chatter = 0.0
     sep = min_separation.min(axis=0)
