@@ -29,6 +29,9 @@ __all__ = ["SlidingModeController", "SMC_DEFAULTS"]
 #: default (c, k) per preset; c defaults to the env's surface_slope
 SMC_DEFAULTS: dict[str | None, dict[str, float]] = {
     "paper": {"k": 300.0},
+    # quadrotor scale (docs/paper-notes.md): c = 1 comes from the preset's surface_slope;
+    # k = 6 stalls behind a wedged UAV in some seeds, k = 10 does not
+    "paper-quadrotor": {"k": 10.0},
 }
 
 
@@ -37,7 +40,8 @@ class SlidingModeController(PairPolicy):
 
     GAINS = {
         "c": (None, "surface slope c of eq. 26 (1/s); default: the env's surface_slope"),
-        "k": (None, "switching gain k (m/s^2); default: 300 for the paper preset"),
+        "k": (None, "switching gain k (m/s^2); default: SMC_DEFAULTS of the preset "
+                    "(300 for paper, 10 for paper-quadrotor)"),
         "a": (None, "attraction slope in the a N y term; default: the env's attraction"),
         "b": (None, "consensus weight in the b N y' term; default: the env's consensus"),
         "boundary_layer": (None, "phi (m^2/s) for sat(s/phi); None uses sign(s) as the paper"),

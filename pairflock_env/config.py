@@ -30,10 +30,12 @@ __all__ = [
     "preset_names",
 ]
 
-_DYNAMICS = ("particle",)
+_DYNAMICS = ("particle", "quadrotor")
 _INTEGRATORS = ("semi_implicit", "exact")
 _INITS = ("corners", "random")
-_LEADERS = ("constant_velocity",)
+_LEADERS = ("constant_velocity", "climb_and_turn")
+#: vector fields given as one repeated number are re-broadcast when ``replace`` changes dim
+_BROADCAST_VECTORS = ("leader_position", "leader_velocity", "swarm_center")
 
 
 def _bad(field: str, value: Any, valid: str, exc: type[Exception] = ValueError) -> Exception:
@@ -58,7 +60,8 @@ class PairFlockConfig:
     dim: int = 2
     """Spatial dimension (2 or 3; the quadrotor needs 3)."""
     dynamics: str = "particle"
-    """Vehicle model: ``"particle"`` (double integrator, eq. 1)."""
+    """Vehicle model: ``"particle"`` (double integrator, eq. 1) or ``"quadrotor"`` (6-DOF rigid
+    body behind a geometric attitude controller, ``quad_*`` fields; needs dim=3)."""
 
     # --- timing --------------------------------------------------------------------------
     dt: float = 0.01
@@ -95,11 +98,22 @@ class PairFlockConfig:
 
     # --- virtual leader ------------------------------------------------------------------
     leader: str = "constant_velocity"
-    """Leader trajectory: ``"constant_velocity"``."""
+    """Leader trajectory: ``"constant_velocity"`` or ``"climb_and_turn"`` (Sec. VI-B: climb,
+    level off, smooth heading turns; see ``pairflock_env.leader.ClimbAndTurnLeader``)."""
     leader_position: Any = 25.0
     """Leader position at t = 0 (m)."""
     leader_velocity: Any = 0.5
-    """Leader velocity (m/s) for ``"constant_velocity"``."""
+    """Leader velocity at t = 0 (m/s). ``"climb_and_turn"``: its horizontal part sets the
+    ground speed and initial heading, its vertical part (3-D) the climb rate."""
+    leader_climb_time: float | None = None
+    """``"climb_and_turn"``: the climb (vertical velocity) lasts this long (s); None = forever."""
+    leader_level_time: float = 0.0
+    """``"climb_and_turn"``: after the climb, the vertical velocity fades to 0 over this many
+    seconds along a half-cosine (0 = levels off at once)."""
+    leader_turns: Any = ()
+    """``"climb_and_turn"``: heading turns ((start s, duration s, angle deg), ...), in time
+    order and not overlapping; positive angles turn left (counter-clockwise seen from above).
+    The heading follows psi0 + angle (1 - cos(pi (t - start) / duration)) / 2 in a turn."""
 
     # --- pairs ---------------------------------------------------------------------------
     pairs: Any = ((0, 1),)
@@ -116,10 +130,14 @@ class PairFlockConfig:
     init: str = "corners"
     """``"corners"``: pair members in opposite corners (the paper's extreme case);
     ``"random"``: pair members anywhere in the corner box."""
-    swarm_half_width: float = 50.0
-    """Unpaired UAVs start uniform in [-w, w]^dim around the origin (m), at rest."""
-    pair_corner: float = 90.0
-    """Pair members start at -/+ this coordinate on every axis (m) (``init="corners"``)."""
+    swarm_half_width: Any = 50.0
+    """Unpaired UAVs start uniform in [-w, w]^dim around ``swarm_center`` (m), at rest; one
+    number for every axis or one per axis."""
+    pair_corner: Any = 90.0
+    """Pair members start at ``swarm_center`` -/+ this offset on every axis (m)
+    (``init="corners"``); one number for every axis or one per axis (>= 0, not all 0)."""
+    swarm_center: Any = 0.0
+    """Centre of the start box (m); a number for every axis or a sequence of ``dim``."""
     min_init_spacing: float = 2.0
     """No two UAVs start closer than this (m)."""
 
@@ -157,6 +175,58 @@ class PairFlockConfig:
     disturbance_std: float = 0.0
     """Std (m/s^2) of a random acceleration added to every UAV's command, per axis, drawn
     each control period and held over it."""
+
+    # --- quadrotor (dynamics="quadrotor"; docs/quadrotor.md) ------------------------------
+    # Airframe: the paper's mass and inertia (Sec. VI-B); the rest from an F450-class frame as
+    # identified by T. Luukkonen, "Modelling and control of quadcopter", Aalto University
+    # (2011), Table 1 (m = 0.468 kg, close to the paper's 0.455 kg).
+    quad_mass: float = 0.455
+    """Mass m (kg). Source: the paper, Sec. VI-B."""
+    quad_inertia: Any = (0.43e-2, 0.43e-2, 1.02e-2)
+    """Principal moments of inertia (Jxx, Jyy, Jzz) (kg m^2), body axes. Source: the paper,
+    Sec. VI-B. (Jzz > Jxx + Jyy, which no rigid body has exactly; used as given.)"""
+    quad_arm_length: float = 0.225
+    """Distance from the centre of mass to each rotor axis, L (m). Source: Luukkonen (2011)."""
+    quad_thrust_coeff: float = 2.98e-6
+    """Rotor thrust coefficient k_f, T = k_f W^2 (N s^2/rad^2). Source: Luukkonen (2011)."""
+    quad_torque_coeff: float = 1.14e-7
+    """Rotor drag-torque coefficient k_m, reaction torque k_m W^2 (N m s^2/rad^2). Source:
+    Luukkonen (2011)."""
+    quad_motor_thrust_min: float = 0.05
+    """Smallest thrust of one rotor (N): motors idle, they do not stop or reverse (rotor
+    speed sqrt(0.05 / k_f) = 130 rad/s). Assumed idle level, as in docs/quadrotor.md."""
+    quad_motor_thrust_max: float = 2.79
+    """Largest thrust of one rotor (N): 4 x 2.79 N = 2.5 x the weight of 0.455 kg, a common
+    thrust-to-weight design margin for small multirotors (rotor speed 968 rad/s). Assumed,
+    as in docs/quadrotor.md."""
+    quad_motor_time_constant: float = 0.03
+    """Time constant tau of the first-order rotor-speed response (s); 0 = instantaneous.
+    Assumed, in the tens-of-milliseconds range identified for brushless motors of this size
+    (e.g. Eschmann et al. 2024, arXiv:2404.07837)."""
+    quad_drag: float = 0.0
+    """Linear translational drag coefficient k_d, force -k_d p (kg/s); the controller
+    compensates it. 0 (the paper's rigid-body model); Luukkonen (2011) identifies 0.25."""
+    quad_gravity: float = 9.81
+    """Gravitational acceleration g (m/s^2)."""
+    quad_attitude_freq: float = 15.0
+    """Roll/pitch natural frequency wn of the attitude loop (rad/s): K_R = J wn^2."""
+    quad_attitude_damping: float = 0.9
+    """Damping ratio zeta of the attitude loop (all axes): K_w = 2 zeta J wn."""
+    quad_yaw_freq: float = 5.0
+    """Yaw natural frequency of the attitude loop (rad/s)."""
+    quad_accel_limit: float = 6.0
+    """Largest norm of the desired acceleration the vehicle accepts (m/s^2); larger
+    commands are scaled down (reported as ``accel_limited``)."""
+    quad_tilt_limit: float = 35.0
+    """Tilt cone (deg): the desired thrust direction stays within this angle of vertical
+    (horizontal command scaled down, reported as ``accel_limited``). In (0, 90)."""
+    quad_yaw: float = 0.0
+    """Fixed heading psi of every quadrotor (deg, from the world x axis)."""
+    quad_crash_tilt: float = 90.0
+    """A UAV tilted beyond this (deg) has flipped: it crashes (episode ends). In
+    (quad_tilt_limit, 180]; 180 disables the check."""
+    quad_ground_altitude: float | None = None
+    """A UAV below this altitude z (m) has hit the ground and crashes; None = no ground."""
 
     # ------------------------------------------------------------------------------------
     def __post_init__(self) -> None:
@@ -204,7 +274,7 @@ class PairFlockConfig:
         merged.update(overrides)
         # Scalars that were broadcast for the old dim are re-broadcast for a new one.
         if "dim" in overrides:
-            for name in ("leader_position", "leader_velocity"):
+            for name in _BROADCAST_VECTORS:
                 if name not in overrides:
                     v = np.asarray(merged[name])
                     if v.ndim == 1 and np.all(v == v[0]):
@@ -277,6 +347,16 @@ def _as_float(name: str, value: Any, *, positive: bool = False, nonneg: bool = F
     return value
 
 
+def _as_box(name: str, value: Any, dim: int) -> float | tuple[float, ...]:
+    """A half-width: one number >= 0 (kept as a float) or ``dim`` numbers >= 0, not all 0."""
+    if np.ndim(value) == 0:
+        return _as_float(name, value, positive=True)
+    v = _as_vector(name, value, dim)
+    if min(v) < 0 or max(v) <= 0:
+        raise _bad(name, value, "components must be >= 0 and not all 0")
+    return v
+
+
 def _as_choice(name: str, value: Any, choices: Sequence[str]) -> str:
     if value not in choices:
         raise _bad(name, value, f"must be one of {', '.join(map(repr, choices))}")
@@ -342,6 +422,7 @@ def _validate(cfg: PairFlockConfig) -> None:
     _set(cfg, "leader", _as_choice("leader", cfg.leader, _LEADERS))
     _set(cfg, "leader_position", _as_vector("leader_position", cfg.leader_position, cfg.dim))
     _set(cfg, "leader_velocity", _as_vector("leader_velocity", cfg.leader_velocity, cfg.dim))
+    _validate_leader_path(cfg)
 
     pairs = cfg.pairs
     if not isinstance(pairs, Sequence) or isinstance(pairs, str) or len(pairs) == 0:
@@ -383,7 +464,8 @@ def _validate(cfg: PairFlockConfig) -> None:
 
     _set(cfg, "init", _as_choice("init", cfg.init, _INITS))
     for name in ("swarm_half_width", "pair_corner"):
-        _set(cfg, name, _as_float(name, getattr(cfg, name), positive=True))
+        _set(cfg, name, _as_box(name, getattr(cfg, name), cfg.dim))
+    _set(cfg, "swarm_center", _as_vector("swarm_center", cfg.swarm_center, cfg.dim))
     _set(cfg, "min_init_spacing", _as_float("min_init_spacing", cfg.min_init_spacing, nonneg=True))
     if cfg.init == "corners" and len(norm) > 2 ** (cfg.dim - 1):
         raise _bad(
@@ -417,6 +499,111 @@ def _validate(cfg: PairFlockConfig) -> None:
     for name in ("obs_noise_position", "obs_noise_velocity", "disturbance_std"):
         _set(cfg, name, _as_float(name, getattr(cfg, name), nonneg=True))
     _set(cfg, "partner_delay", _as_int("partner_delay", cfg.partner_delay, 0))
+    _validate_corners(cfg)
+    _validate_quadrotor(cfg)
+
+
+def _validate_leader_path(cfg: PairFlockConfig) -> None:
+    """Fields of the ``"climb_and_turn"`` leader (checked whatever the leader type)."""
+    if cfg.leader_climb_time is not None:
+        _set(cfg, "leader_climb_time",
+             _as_float("leader_climb_time", cfg.leader_climb_time, nonneg=True))  # fmt: skip
+    _set(cfg, "leader_level_time", _as_float("leader_level_time", cfg.leader_level_time, nonneg=True))
+    turns = cfg.leader_turns
+    if isinstance(turns, str) or not isinstance(turns, Sequence):
+        raise _bad("leader_turns", turns,
+                   "must be a sequence of (start s, duration s, angle deg) triples", TypeError)  # fmt: skip
+    norm: list[tuple[float, float, float]] = []
+    for tr in turns:
+        if isinstance(tr, str) or not isinstance(tr, Sequence) or len(tr) != 3:
+            raise _bad("leader_turns", turns, "each turn must be (start s, duration s, angle deg)")
+        start = _as_float("leader_turns start", tr[0], nonneg=True)
+        dur = _as_float("leader_turns duration", tr[1], positive=True)
+        ang = _as_float("leader_turns angle", tr[2])
+        if norm and start < norm[-1][0] + norm[-1][1]:
+            raise _bad("leader_turns", turns,
+                       "turns must be in time order and must not overlap")  # fmt: skip
+        norm.append((start, dur, ang))
+    _set(cfg, "leader_turns", tuple(norm))
+    if cfg.leader == "climb_and_turn" and norm and np.hypot(*cfg.leader_velocity[:2]) == 0:
+        raise _bad("leader_velocity", cfg.leader_velocity,
+                   "needs a non-zero horizontal part to define a heading for leader_turns")  # fmt: skip
+
+
+def _validate_corners(cfg: PairFlockConfig) -> None:
+    """With ``init="corners"`` the pair members' fixed start points must be distinct."""
+    if cfg.init != "corners":
+        return
+    from itertools import combinations
+
+    corner = np.broadcast_to(np.asarray(cfg.pair_corner, dtype=np.float64), (cfg.dim,))
+    diags = corner_diagonals(cfg.dim)[: len(cfg.pairs)]
+    pts = np.concatenate([-diags * corner, diags * corner])
+    for i, j in combinations(range(len(pts)), 2):
+        d = float(np.linalg.norm(pts[i] - pts[j]))
+        if d < max(cfg.min_init_spacing, 1e-9):
+            raise _bad(
+                "pair_corner", cfg.pair_corner,
+                f'puts two pair members of init="corners" {d:g} m apart (at least '
+                f"min_init_spacing={cfg.min_init_spacing} needed); use non-zero offsets on "
+                'more axes or init="random"',
+            )  # fmt: skip
+
+
+def corner_diagonals(dim: int) -> np.ndarray:
+    """Unit-sign diagonals of the cube, (1, 1[, 1]) first; one per pair in 'corners' mode."""
+    out = []
+    for k in range(2 ** (dim - 1)):
+        signs = [1.0] + [(-1.0 if (k >> (dim - 2 - j)) & 1 else 1.0) for j in range(dim - 1)]
+        out.append(signs)
+    return np.asarray(out)
+
+
+def _validate_quadrotor(cfg: PairFlockConfig) -> None:
+    """The ``quad_*`` fields (always checked, used when ``dynamics="quadrotor"``)."""
+    for name in ("quad_mass", "quad_arm_length", "quad_thrust_coeff", "quad_torque_coeff",
+                 "quad_motor_thrust_max", "quad_gravity", "quad_attitude_freq",
+                 "quad_attitude_damping", "quad_yaw_freq", "quad_accel_limit"):  # fmt: skip
+        _set(cfg, name, _as_float(name, getattr(cfg, name), positive=True))
+    for name in ("quad_motor_thrust_min", "quad_motor_time_constant", "quad_drag"):
+        _set(cfg, name, _as_float(name, getattr(cfg, name), nonneg=True))
+    _set(cfg, "quad_yaw", _as_float("quad_yaw", cfg.quad_yaw))
+    inertia = _as_vector("quad_inertia", cfg.quad_inertia, 3)
+    if min(inertia) <= 0:
+        raise _bad("quad_inertia", cfg.quad_inertia, "all three moments must be > 0 (kg m^2)")
+    _set(cfg, "quad_inertia", inertia)
+    hover = cfg.quad_mass * cfg.quad_gravity / 4.0
+    if not cfg.quad_motor_thrust_min < hover < cfg.quad_motor_thrust_max:
+        raise _bad(
+            "quad_motor_thrust_max" if hover >= cfg.quad_motor_thrust_max else "quad_motor_thrust_min",
+            cfg.quad_motor_thrust_max if hover >= cfg.quad_motor_thrust_max else cfg.quad_motor_thrust_min,
+            f"the hover thrust per rotor m g / 4 = {hover:.4g} N must lie strictly between "
+            f"quad_motor_thrust_min={cfg.quad_motor_thrust_min} and "
+            f"quad_motor_thrust_max={cfg.quad_motor_thrust_max}",
+        )  # fmt: skip
+    tilt = _as_float("quad_tilt_limit", cfg.quad_tilt_limit)
+    if not 0 < tilt < 90:
+        raise _bad("quad_tilt_limit", tilt, "must be in (0, 90) degrees")
+    _set(cfg, "quad_tilt_limit", tilt)
+    crash = _as_float("quad_crash_tilt", cfg.quad_crash_tilt)
+    if not tilt < crash <= 180:
+        raise _bad("quad_crash_tilt", crash, f"must be in (quad_tilt_limit={tilt}, 180] degrees")
+    _set(cfg, "quad_crash_tilt", crash)
+    if cfg.quad_ground_altitude is not None:
+        _set(cfg, "quad_ground_altitude",
+             _as_float("quad_ground_altitude", cfg.quad_ground_altitude))  # fmt: skip
+    if cfg.dynamics == "quadrotor":
+        # explicit integration of the attitude loop needs h * (fastest rate) small
+        rate = max(cfg.quad_attitude_freq, cfg.quad_yaw_freq) * max(1.0, 2 * cfg.quad_attitude_damping)
+        h_max = 0.1 / rate
+        if cfg.physics_dt > h_max * (1 + 1e-9):
+            need = math.ceil(cfg.dt / h_max - 1e-9)
+            raise _bad(
+                "substeps", cfg.substeps,
+                f"physics step dt/substeps = {cfg.physics_dt:.4g} s is too coarse for the "
+                f"quadrotor attitude loop (needs <= {h_max:.4g} s = 0.1 / {rate:g} rad/s); "
+                f"use substeps >= {need} with dt={cfg.dt}",
+            )  # fmt: skip
 
 
 # ---------------------------------------------------------------------------------------
@@ -453,6 +640,43 @@ PRESETS: dict[str, dict[str, Any]] = {
         min_init_spacing=2.0,
     ),
 }
+
+
+# Sec. VI-B at quadrotor scale, with the parameter set of docs/paper-notes.md ("Quadrotor
+# experiment"): 10 quadrotors, one pair, a leader that climbs, levels off and turns twice.
+PRESETS["paper-quadrotor"] = dict(
+    n_uavs=10,
+    dim=3,
+    dynamics="quadrotor",
+    dt=0.02,  # protocol and pair action at 50 Hz ...
+    substeps=10,  # ... physics and attitude loop at 500 Hz
+    integrator="semi_implicit",
+    horizon=65.0,
+    spacing=3.0,
+    radius=3.6,
+    attraction=0.3,
+    repulsion=3.0,
+    consensus=1.0,
+    pinning="all",
+    pin_position_gain=0.5,
+    pin_velocity_gain=1.414,
+    leader="climb_and_turn",
+    leader_position=(0.0, 0.0, 20.0),
+    leader_velocity=(5.0, 0.0, 1.0),  # 5 m/s along +x, climbing at 1 m/s ...
+    leader_climb_time=20.0,  # ... until 20 s,
+    leader_level_time=2.0,  # levelling off during the first turn
+    leader_turns=((20.0, 2.0, 90.0), (50.0, 2.0, 90.0)),
+    pairs=((0, 1),),
+    d_m=2.5,
+    surface_slope=1.0,
+    pair_accel_limit=20.0,
+    init="corners",
+    swarm_center=(0.0, 0.0, 20.0),
+    swarm_half_width=(6.0, 6.0, 1.5),
+    pair_corner=(10.0, 10.0, 0.0),  # pair at (-10, -10, 20) and (10, 10, 20)
+    min_init_spacing=2.0,
+    quad_ground_altitude=0.0,
+)
 
 
 def preset_names() -> tuple[str, ...]:

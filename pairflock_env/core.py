@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .config import PairFlockConfig, make_config
+from .config import PairFlockConfig, corner_diagonals, make_config
 from .dynamics import make_vehicle
 from .flocking import FlockingParams, flocking_pass, pair_pass
 from .leader import make_leader
@@ -300,15 +300,15 @@ class PairFlockCore:
         q = np.empty((N, D))
         fixed = np.zeros(N, bool)
         if cfg.init == "corners":
-            diags = _diagonals(D)
+            diags = corner_diagonals(D) * cfg.vector("pair_corner")
             for k, (a, b) in enumerate(cfg.pairs):
-                q[a] = -cfg.pair_corner * diags[k]
-                q[b] = cfg.pair_corner * diags[k]
+                q[a] = -diags[k]
+                q[b] = diags[k]
                 fixed[a] = fixed[b] = True
         free = np.flatnonzero(~fixed)
         paired = np.zeros(N, bool)
         paired[self.agent_uavs] = True
-        half = np.where(paired, cfg.pair_corner, cfg.swarm_half_width)[:, None]
+        half = np.where(paired[:, None], cfg.vector("pair_corner"), cfg.vector("swarm_half_width"))
         q[free] = rng.uniform(-1.0, 1.0, (free.size, D)) * half[free]
         spacing2 = cfg.min_init_spacing**2
         if spacing2 > 0:
@@ -328,7 +328,7 @@ class PairFlockCore:
                     f"n_uavs={N} that far apart in the start box "
                     f"(swarm_half_width={cfg.swarm_half_width})"
                 )
-        return q, np.zeros((N, D))
+        return q + cfg.vector("swarm_center"), np.zeros((N, D))
 
     def _pinning_mask(self, q: np.ndarray, leader_q: np.ndarray) -> np.ndarray:
         pin = self.config.pinning
@@ -503,12 +503,3 @@ class PairFlockCore:
         """The current observation (B, M, obs_size), float32 (a copy)."""
         self._require_reset()
         return self._obs.copy()
-
-
-def _diagonals(dim: int) -> np.ndarray:
-    """Unit-sign diagonals of the cube, (1, 1[, 1]) first; one per pair in 'corners' mode."""
-    out = []
-    for k in range(2 ** (dim - 1)):
-        signs = [1.0] + [(-1.0 if (k >> (dim - 2 - j)) & 1 else 1.0) for j in range(dim - 1)]
-        out.append(signs)
-    return np.asarray(out)

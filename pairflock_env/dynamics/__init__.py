@@ -15,8 +15,9 @@ import numpy as np
 
 from ..config import PairFlockConfig
 from .particle import ParticleModel
+from .quadrotor import QuadrotorModel
 
-__all__ = ["VehicleModel", "ParticleModel", "VEHICLES", "make_vehicle"]
+__all__ = ["VehicleModel", "ParticleModel", "QuadrotorModel", "VEHICLES", "make_vehicle"]
 
 
 class VehicleModel(Protocol):
@@ -37,6 +38,7 @@ class VehicleModel(Protocol):
 
 VEHICLES: dict[str, Callable[[PairFlockConfig, int], VehicleModel]] = {
     "particle": ParticleModel,
+    "quadrotor": QuadrotorModel,
 }
 
 

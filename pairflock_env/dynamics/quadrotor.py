@@ -1,0 +1,371 @@
+"""A batched 6-DOF quadrotor that tracks the swarm protocol's desired acceleration.
+
+Every UAV of every swarm (arrays (B, N, ...)) is a rigid body with four rotors in an X
+configuration, flown by a geometric SO(3) controller (Lee, Leok & McClamroch, "Geometric
+tracking control of a quadrotor UAV on SE(3)", CDC 2010) whose input is the desired
+acceleration a_des (m/s^2, world frame, z up) that the flocking protocol and the pair term
+produce once per control period ``dt``. Controller, mixer, motors and rigid body run together
+at the physics rate ``dt / substeps`` (500 Hz in the paper-quadrotor preset) with a_des held.
+
+State per UAV: position q (m) and velocity p (m/s) (the core's arrays), attitude R in SO(3)
+(body -> world), body rates w (rad/s), rotor speeds W_i (rad/s, i = 0..3).
+
+Parameters (``PairFlockConfig.quad_*``, see ``docs/quadrotor.md`` for values and sources):
+mass m (kg), inertia J = diag(Jx, Jy, Jz) (kg m^2), arm length L (m), thrust and drag-torque
+coefficients k_f (N s^2/rad^2), k_m (N m s^2/rad^2), per-rotor thrust limits [T_min, T_max]
+(N), motor time constant tau (s), linear drag k_d (kg/s), gravity g (m/s^2), attitude-loop
+natural frequencies wn (roll/pitch) and wn_z (yaw) (rad/s) and damping zeta, acceleration
+limit a_max (m/s^2), tilt limit theta_max, fixed heading psi, crash tilt, ground altitude.
+
+Per physics step of length h, for each UAV:
+
+1. Command (once per control period, a_des is held):
+       a_c = a_des * min(1, a_max / ||a_des||)                      acceleration limit
+2. Desired force (world frame, N), drag compensated:
+       F = m (a_c + g e3) + k_d p
+   tilt cone: F_z >= m g / 10 and ||F_xy|| <= F_z tan(theta_max) (the horizontal part is
+   scaled down; vertical takes priority, so altitude holds while a lateral command is cut).
+3. Desired attitude (Lee et al., eqs. 12-13) with a fixed heading psi:
+       b3d = F / ||F||,  b1c = (cos psi, sin psi, 0),
+       b2d = b3d x b1c / ||b3d x b1c||,  b1d = b2d x b3d,  R_d = [b1d b2d b3d]
+4. Collective thrust and moments (Lee et al., eqs. 15-16, desired body rates 0):
+       f = F . R e3
+       e_R = 1/2 vee(R_d^T R - R^T R_d),   e_w = w
+       M = -K_R e_R - K_w e_w + w x J w,   K_R = J wn^2,  K_w = 2 zeta J wn   (per axis)
+   so that each axis behaves as theta'' + 2 zeta wn theta' + wn^2 theta = 0 near hover.
+5. Mixer (X frame, rotor i at angle 45 + 90 i degrees, d = L / sqrt(2), spin sigma = +,-,+,-):
+       [f, Mx, My, Mz] = A [T_0..T_3],  A = [[1, 1, 1, 1], d [1, 1, -1, -1],
+                                            d [-1, 1, 1, -1], kappa [1, -1, 1, -1]]
+   with kappa = k_m / k_f (m). The rows are orthogonal, so T = A^T diag(1/4, 1/4d^2, 1/4d^2,
+   1/4kappa^2) [f, M]. Each T_i is clipped to [T_min, T_max] (reported as ``motor_saturated``).
+6. Motors: first-order lag on rotor speed towards W_c = sqrt(T_i / k_f), solved exactly
+   over the step: W <- W + (W_c - W)(1 - exp(-h / tau)); the rotors then produce
+   T_i = k_f W_i^2 and, through A, the moments (Mx, My, Mz) acting on the body.
+7. Rigid body (semi-implicit Euler, like the particle model; rotation by the exponential map):
+       p <- p + h (R e3 sum(T_i) / m - g e3 - k_d p / m),   q <- q + h p
+       w <- w + h J^-1 (M - w x J w),                       R <- R exp(hat(h w))
+8. Crash check: a UAV whose tilt exceeds the crash tilt (flipped), whose altitude is below
+   the ground (when one is set), or whose command or state is non-finite is *crashed*: it
+   stops where it is (velocity, rates and rotors set to zero) and is no longer integrated.
+   Its swarm reports ``vehicle_terminated``, which ends that swarm's episode in every view.
+
+The whole loop runs in one numba kernel, single-threaded, one UAV at a time over all its
+substeps (UAVs are independent within a control period, since a_des is held).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..config import PairFlockConfig
+from ..math3d import so3_exp_scalar
+
+__all__ = ["QuadrotorModel", "QuadrotorParams", "ROTOR_ANGLES_DEG", "ROTOR_SPIN"]
+
+#: rotor positions: angle from the body x axis (deg), X configuration
+ROTOR_ANGLES_DEG = (45.0, 135.0, 225.0, 315.0)
+#: sign of each rotor's reaction torque about body z (Mz = kappa * sum(spin_i T_i))
+ROTOR_SPIN = (1.0, -1.0, 1.0, -1.0)
+
+# indices into the kernel's parameter vector
+(_M, _G, _JX, _JY, _JZ, _D, _KAPPA, _KF, _TMIN, _TMAX, _ALPHA, _KD, _KRX, _KRY, _KRZ,
+ _KWX, _KWY, _KWZ, _AMAX, _TANTILT, _FZMIN, _CPSI, _SPSI, _COSCRASH, _GROUND,
+ _NPARAM) = range(26)  # fmt: skip
+
+
+class QuadrotorParams:
+    """Derived constants of the quadrotor model and its inner loop, from a config."""
+
+    def __init__(self, cfg: PairFlockConfig) -> None:
+        self.mass = cfg.quad_mass
+        self.inertia = np.asarray(cfg.quad_inertia, dtype=np.float64)
+        self.arm = cfg.quad_arm_length
+        self.k_f = cfg.quad_thrust_coeff
+        self.k_m = cfg.quad_torque_coeff
+        self.kappa = self.k_m / self.k_f
+        self.d = self.arm / math.sqrt(2.0)
+        self.t_min = cfg.quad_motor_thrust_min
+        self.t_max = cfg.quad_motor_thrust_max
+        self.tau = cfg.quad_motor_time_constant
+        self.drag = cfg.quad_drag
+        self.g = cfg.quad_gravity
+        self.h = cfg.physics_dt
+        self.substeps = cfg.substeps
+        wn = np.array([cfg.quad_attitude_freq, cfg.quad_attitude_freq, cfg.quad_yaw_freq])
+        zeta = cfg.quad_attitude_damping
+        self.k_R = self.inertia * wn**2
+        self.k_w = 2.0 * zeta * self.inertia * wn
+        self.accel_limit = cfg.quad_accel_limit
+        self.tilt_limit = math.radians(cfg.quad_tilt_limit)
+        self.yaw = math.radians(cfg.quad_yaw)
+        self.crash_tilt = math.radians(cfg.quad_crash_tilt)
+        self.ground = -math.inf if cfg.quad_ground_altitude is None else cfg.quad_ground_altitude
+        self.hover_thrust = self.mass * self.g / 4.0
+        self.hover_speed = math.sqrt(self.hover_thrust / self.k_f)
+        alpha = 1.0 if self.tau == 0 else -math.expm1(-self.h / self.tau)
+        v = np.empty(_NPARAM)
+        v[_M], v[_G] = self.mass, self.g
+        v[_JX], v[_JY], v[_JZ] = self.inertia
+        v[_D], v[_KAPPA], v[_KF] = self.d, self.kappa, self.k_f
+        v[_TMIN], v[_TMAX], v[_ALPHA], v[_KD] = self.t_min, self.t_max, alpha, self.drag
+        v[_KRX], v[_KRY], v[_KRZ] = self.k_R
+        v[_KWX], v[_KWY], v[_KWZ] = self.k_w
+        v[_AMAX], v[_TANTILT] = self.accel_limit, math.tan(self.tilt_limit)
+        v[_FZMIN] = 0.1 * self.mass * self.g
+        v[_CPSI], v[_SPSI] = math.cos(self.yaw), math.sin(self.yaw)
+        v[_COSCRASH], v[_GROUND] = math.cos(self.crash_tilt), self.ground
+        self.vector = v
+
+    def mixer_matrix(self) -> np.ndarray:
+        """A (4, 4): [f, Mx, My, Mz] = A @ [T_0, T_1, T_2, T_3] (N, N m)."""
+        ang = np.radians(ROTOR_ANGLES_DEG)
+        x, y = self.arm * np.cos(ang), self.arm * np.sin(ang)
+        return np.stack([np.ones(4), y, -x, self.kappa * np.asarray(ROTOR_SPIN)])
+
+
+@njit(cache=True, nogil=True)
+def _quadrotor_kernel(q, p, a_des, R, w, rotor, crashed, R_des, saturated, limited, crashed_now,
+                      substeps, h, prm):  # fmt: skip
+    B, N, _ = q.shape
+    m, g = prm[_M], prm[_G]
+    jx, jy, jz = prm[_JX], prm[_JY], prm[_JZ]
+    d, kappa, kf = prm[_D], prm[_KAPPA], prm[_KF]
+    tmin, tmax, alpha, kd = prm[_TMIN], prm[_TMAX], prm[_ALPHA], prm[_KD]
+    krx, kry, krz = prm[_KRX], prm[_KRY], prm[_KRZ]
+    kwx, kwy, kwz = prm[_KWX], prm[_KWY], prm[_KWZ]
+    amax, tant, fzmin = prm[_AMAX], prm[_TANTILT], prm[_FZMIN]
+    cpsi, spsi, coscrash, ground = prm[_CPSI], prm[_SPSI], prm[_COSCRASH], prm[_GROUND]
+    inv4d = 0.25 / d
+    inv4k = 0.25 / kappa
+    inv_m = 1.0 / m
+    for b in range(B):
+        for n in range(N):
+            saturated[b, n] = False
+            limited[b, n] = False
+            crashed_now[b, n] = False
+            if crashed[b, n]:
+                continue
+            # 1. acceleration limit on the held command
+            ax, ay, az = a_des[b, n, 0], a_des[b, n, 1], a_des[b, n, 2]
+            an = math.sqrt(ax * ax + ay * ay + az * az)
+            if not math.isfinite(an):
+                crashed[b, n] = True
+                crashed_now[b, n] = True
+                for k in range(3):
+                    p[b, n, k] = 0.0
+                    w[b, n, k] = 0.0
+                for k in range(4):
+                    rotor[b, n, k] = 0.0
+                continue
+            if an > amax:
+                sc = amax / an
+                ax *= sc
+                ay *= sc
+                az *= sc
+                limited[b, n] = True
+            x, y, z = q[b, n, 0], q[b, n, 1], q[b, n, 2]
+            vx, vy, vz = p[b, n, 0], p[b, n, 1], p[b, n, 2]
+            r00, r01, r02 = R[b, n, 0, 0], R[b, n, 0, 1], R[b, n, 0, 2]
+            r10, r11, r12 = R[b, n, 1, 0], R[b, n, 1, 1], R[b, n, 1, 2]
+            r20, r21, r22 = R[b, n, 2, 0], R[b, n, 2, 1], R[b, n, 2, 2]
+            wx, wy, wz = w[b, n, 0], w[b, n, 1], w[b, n, 2]
+            o0, o1, o2, o3 = rotor[b, n, 0], rotor[b, n, 1], rotor[b, n, 2], rotor[b, n, 3]
+            b10 = b11 = b12 = b20 = b21 = b22 = b30 = b31 = b32 = 0.0
+            crash = False
+            for _s in range(substeps):
+                # 2. desired force with drag compensation, then the tilt cone
+                fx = m * ax + kd * vx
+                fy = m * ay + kd * vy
+                fz = m * (az + g) + kd * vz
+                if fz < fzmin:
+                    fz = fzmin
+                    limited[b, n] = True
+                fh = math.sqrt(fx * fx + fy * fy)
+                if fh > fz * tant:
+                    sc = fz * tant / fh
+                    fx *= sc
+                    fy *= sc
+                    limited[b, n] = True
+                fn = math.sqrt(fx * fx + fy * fy + fz * fz)
+                # 3. desired attitude R_d = [b1 b2 b3]
+                b30, b31, b32 = fx / fn, fy / fn, fz / fn
+                c0 = b31 * 0.0 - b32 * spsi  # b3 x (cos psi, sin psi, 0)
+                c1 = b32 * cpsi - b30 * 0.0
+                c2 = b30 * spsi - b31 * cpsi
+                cn = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+                b20, b21, b22 = c0 / cn, c1 / cn, c2 / cn
+                b10 = b21 * b32 - b22 * b31
+                b11 = b22 * b30 - b20 * b32
+                b12 = b20 * b31 - b21 * b30
+                # 4. collective thrust and moments; E = R_d^T R
+                f = fx * r02 + fy * r12 + fz * r22
+                e01 = b10 * r01 + b11 * r11 + b12 * r21
+                e02 = b10 * r02 + b11 * r12 + b12 * r22
+                e10 = b20 * r00 + b21 * r10 + b22 * r20
+                e12 = b20 * r02 + b21 * r12 + b22 * r22
+                e20 = b30 * r00 + b31 * r10 + b32 * r20
+                e21 = b30 * r01 + b31 * r11 + b32 * r21
+                erx = 0.5 * (e21 - e12)
+                ery = 0.5 * (e02 - e20)
+                erz = 0.5 * (e10 - e01)
+                hx, hy, hz = jx * wx, jy * wy, jz * wz  # angular momentum J w
+                gx = wy * hz - wz * hy  # w x J w
+                gy = wz * hx - wx * hz
+                gz = wx * hy - wy * hx
+                mx = -krx * erx - kwx * wx + gx
+                my = -kry * ery - kwy * wy + gy
+                mz = -krz * erz - kwz * wz + gz
+                # 5. mixer with clipping
+                t0 = 0.25 * f + inv4d * (mx - my) + inv4k * mz
+                t1 = 0.25 * f + inv4d * (mx + my) - inv4k * mz
+                t2 = 0.25 * f + inv4d * (my - mx) + inv4k * mz
+                t3 = 0.25 * f - inv4d * (mx + my) - inv4k * mz
+                if t0 < tmin or t0 > tmax or t1 < tmin or t1 > tmax or t2 < tmin or t2 > tmax \
+                        or t3 < tmin or t3 > tmax:  # fmt: skip
+                    saturated[b, n] = True
+                    t0 = min(max(t0, tmin), tmax)
+                    t1 = min(max(t1, tmin), tmax)
+                    t2 = min(max(t2, tmin), tmax)
+                    t3 = min(max(t3, tmin), tmax)
+                # 6. motors: exact first-order lag on rotor speed, then the rotor forces
+                o0 += alpha * (math.sqrt(t0 / kf) - o0)
+                o1 += alpha * (math.sqrt(t1 / kf) - o1)
+                o2 += alpha * (math.sqrt(t2 / kf) - o2)
+                o3 += alpha * (math.sqrt(t3 / kf) - o3)
+                t0, t1, t2, t3 = kf * o0 * o0, kf * o1 * o1, kf * o2 * o2, kf * o3 * o3
+                ft = (t0 + t1) + (t2 + t3)
+                tx = d * ((t0 + t1) - (t2 + t3))
+                ty = d * ((t1 + t2) - (t0 + t3))
+                tz = kappa * ((t0 + t2) - (t1 + t3))
+                # 7. rigid body, semi-implicit Euler
+                acc = ft * inv_m
+                vx += h * (r02 * acc - kd * inv_m * vx)
+                vy += h * (r12 * acc - kd * inv_m * vy)
+                vz += h * (r22 * acc - g - kd * inv_m * vz)
+                x += h * vx
+                y += h * vy
+                z += h * vz
+                wx += h * (tx - gx) / jx
+                wy += h * (ty - gy) / jy
+                wz += h * (tz - gz) / jz
+                e = so3_exp_scalar(h * wx, h * wy, h * wz)
+                n00 = r00 * e[0] + r01 * e[3] + r02 * e[6]
+                n01 = r00 * e[1] + r01 * e[4] + r02 * e[7]
+                n02 = r00 * e[2] + r01 * e[5] + r02 * e[8]
+                n10 = r10 * e[0] + r11 * e[3] + r12 * e[6]
+                n11 = r10 * e[1] + r11 * e[4] + r12 * e[7]
+                n12 = r10 * e[2] + r11 * e[5] + r12 * e[8]
+                n20 = r20 * e[0] + r21 * e[3] + r22 * e[6]
+                n21 = r20 * e[1] + r21 * e[4] + r22 * e[7]
+                n22 = r20 * e[2] + r21 * e[5] + r22 * e[8]
+                r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
+                    n00, n01, n02, n10, n11, n12, n20, n21, n22
+                )  # fmt: skip
+                # 8. crash check
+                fin = math.isfinite(x + y + z + vx + vy + vz + wx + wy + wz + r22)
+                if not fin or r22 < coscrash or z < ground:
+                    crash = True
+                    if not fin:  # keep the last finite state
+                        x, y, z = q[b, n, 0], q[b, n, 1], q[b, n, 2]
+                    break
+            if crash:
+                crashed[b, n] = True
+                crashed_now[b, n] = True
+                vx = vy = vz = wx = wy = wz = 0.0
+                o0 = o1 = o2 = o3 = 0.0
+            q[b, n, 0], q[b, n, 1], q[b, n, 2] = x, y, z
+            p[b, n, 0], p[b, n, 1], p[b, n, 2] = vx, vy, vz
+            if math.isfinite(r00 + r01 + r02 + r10 + r11 + r12 + r20 + r21 + r22):
+                R[b, n, 0, 0], R[b, n, 0, 1], R[b, n, 0, 2] = r00, r01, r02
+                R[b, n, 1, 0], R[b, n, 1, 1], R[b, n, 1, 2] = r10, r11, r12
+                R[b, n, 2, 0], R[b, n, 2, 1], R[b, n, 2, 2] = r20, r21, r22
+            w[b, n, 0], w[b, n, 1], w[b, n, 2] = wx, wy, wz
+            rotor[b, n, 0], rotor[b, n, 1], rotor[b, n, 2], rotor[b, n, 3] = o0, o1, o2, o3
+            R_des[b, n, 0, 0], R_des[b, n, 0, 1], R_des[b, n, 0, 2] = b10, b20, b30
+            R_des[b, n, 1, 0], R_des[b, n, 1, 1], R_des[b, n, 1, 2] = b11, b21, b31
+            R_des[b, n, 2, 0], R_des[b, n, 2, 1], R_des[b, n, 2, 2] = b12, b22, b32
+
+
+class QuadrotorModel:
+    """B x N quadrotors behind the desired-acceleration interface (see the module docstring).
+
+    Attributes (read-only views of the vehicle state; the core owns q and p):
+        R: attitude, body to world, (B, N, 3, 3).
+        R_des: the attitude the controller commanded in the last physics step, (B, N, 3, 3)
+            (for Euler-angle plots: ``math3d.euler_zyx(model.R_des)`` vs ``euler_zyx(model.R)``).
+        omega: body rates (B, N, 3), rad/s.  rotor_speed: (B, N, 4), rad/s.
+        crashed: (B, N) bool, sticky until the swarm is reset.
+        motor_saturated, accel_limited: (B, N) bool flags of the last control period.
+    """
+
+    name = "quadrotor"
+
+    def __init__(self, config: PairFlockConfig, num_envs: int) -> None:
+        if config.dim != 3:
+            raise ValueError(f"dim={config.dim!r} is invalid: the quadrotor model needs dim=3")
+        self.params = prm = QuadrotorParams(config)
+        B, N = int(num_envs), config.n_uavs
+        self.agent_uavs = np.asarray(config.pairs, dtype=np.int64).reshape(-1)
+        self.R = np.zeros((B, N, 3, 3))
+        self.R_des = np.zeros((B, N, 3, 3))
+        self.omega = np.zeros((B, N, 3))
+        self.rotor_speed = np.zeros((B, N, 4))
+        self.crashed = np.zeros((B, N), np.bool_)
+        self.motor_saturated = np.zeros((B, N), np.bool_)
+        self.accel_limited = np.zeros((B, N), np.bool_)
+        self._crashed_now = np.zeros((B, N), np.bool_)
+        c, s = math.cos(prm.yaw), math.sin(prm.yaw)
+        self._R0 = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+    @property
+    def motor_thrust(self) -> np.ndarray:
+        """Rotor thrusts k_f W_i^2 (B, N, 4), N."""
+        return self.params.k_f * self.rotor_speed**2
+
+    def reset_rows(self, rows: np.ndarray, q: np.ndarray, p: np.ndarray) -> None:
+        """Swarms ``rows`` start level at the fixed heading, body rates zero, every rotor at
+        the exact hover speed sqrt(m g / (4 k_f)); q and p are the core's initial state."""
+        self.R[rows] = self._R0
+        self.R_des[rows] = self._R0
+        self.omega[rows] = 0.0
+        self.rotor_speed[rows] = self.params.hover_speed
+        for arr in (self.crashed, self.motor_saturated, self.accel_limited, self._crashed_now):
+            arr[rows] = False
+
+    def advance(self, q: np.ndarray, p: np.ndarray, a_des: np.ndarray) -> None:
+        """Fly ``substeps`` physics steps under the held desired acceleration a_des (B, N, 3)."""
+        prm = self.params
+        _quadrotor_kernel(
+            q, p, np.ascontiguousarray(a_des, dtype=np.float64), self.R, self.omega,
+            self.rotor_speed, self.crashed, self.R_des, self.motor_saturated,
+            self.accel_limited, self._crashed_now, prm.substeps, prm.h, prm.vector,
+        )  # fmt: skip
+
+    def tilt(self) -> np.ndarray:
+        """Angle between each body z axis and the vertical, (B, N), degrees."""
+        return np.degrees(np.arccos(np.clip(self.R[..., 2, 2], -1.0, 1.0)))
+
+    def info(self) -> dict[str, np.ndarray]:
+        """Diagnostics of the last control period.
+
+        Swarm level (B,): ``vehicle_terminated`` (some UAV of the swarm has crashed: the core
+        ends the episode), ``crashed_uavs``, ``motor_saturated_uavs``, ``accel_limited_uavs``
+        (counts over all N UAVs). Per agent (B, M): ``crashed``, ``motor_saturated`` (a
+        rotor command was clipped to its thrust limits during the period), ``accel_limited``
+        (the command was cut by the acceleration limit or the tilt cone), ``tilt`` (deg).
+        """
+        ia = self.agent_uavs
+        crashed = self.crashed
+        return {
+            "vehicle_terminated": crashed.any(axis=1),
+            "crashed_uavs": crashed.sum(axis=1),
+            "motor_saturated_uavs": self.motor_saturated.sum(axis=1),
+            "accel_limited_uavs": self.accel_limited.sum(axis=1),
+            "crashed": crashed[:, ia].copy(),
+            "motor_saturated": self.motor_saturated[:, ia].copy(),
+            "accel_limited": self.accel_limited[:, ia].copy(),
+            "tilt": np.degrees(np.arccos(np.clip(self.R[:, ia, 2, 2], -1.0, 1.0))),
+        }
