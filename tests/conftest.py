@@ -12,11 +12,13 @@ import pytest  # noqa: E402
 from pairflock_env import make_config  # noqa: E402
 
 #: every vehicle model the env offers; tests over ``dynamics`` run once per entry
-DYNAMICS = ["particle"]
+DYNAMICS = ["particle", "quadrotor"]
 
 #: a small, fast task per vehicle model (same task, both vehicles)
 SMALL = {
     "particle": dict(preset="paper", n_uavs=12),
+    # Sec. VI-B scenario with fewer UAVs: 3-D, 50 Hz protocol, 500 Hz physics
+    "quadrotor": dict(preset="paper-quadrotor", n_uavs=6),
 }
 
 

@@ -10,15 +10,15 @@ from baselines.rollout import rollout, trace_metrics
 from pairflock_env import PairFlockCore, make_config, parallel_env
 
 
-def test_predict_has_sb3_signature_and_batches():
-    env = parallel_env(preset="paper", n_uavs=12)
+def test_predict_has_sb3_signature_and_batches(small_kwargs):
+    env = parallel_env(**small_kwargs)
     obs, _ = env.reset(seed=0)
     for name in ("smc", "proportional", "zero"):
         pol = make_pair_policy(name, env)
         single = {a: pol.predict(o)[0] for a, o in obs.items()}
         batch, state = pol.predict(np.stack(list(obs.values())), state=None,
                                    episode_start=np.ones(2, bool), deterministic=True)  # fmt: skip
-        assert state is None and batch.dtype == np.float32 and batch.shape == (2, 2)
+        assert state is None and batch.dtype == np.float32 and batch.shape == (2, env.config.dim)
         np.testing.assert_array_equal(batch, np.stack(list(single.values())))
         assert all(env.action_space(a).shape == single[a].shape for a in env.agents)
         env.step(single)
@@ -76,9 +76,17 @@ def test_boundary_layer_removes_chattering():
     assert rows["sat"]["ss_mean_error"] < 0.2 and rows["sign"]["ss_mean_error"] < 0.2
 
 
+#: a short run per vehicle model, long enough for the pair to meet (quadrotor: ~7 s)
+SHORT_RUNS = {
+    "particle": dict(preset="paper", n_uavs=20, horizon=8.0),
+    "quadrotor": dict(preset="paper-quadrotor", horizon=12.0),
+}
+
+
 @pytest.mark.parametrize("name", ["smc", "proportional"])
-def test_each_baseline_beats_zero_on_a_short_run(name):
-    cfg = make_config("paper", n_uavs=20, horizon=8.0)
+def test_each_baseline_beats_zero_on_a_short_run(name, dynamics):
+    kw = dict(SHORT_RUNS[dynamics])
+    cfg = make_config(kw.pop("preset"), **kw)
     seeds = [0, 1]
     zero = trace_metrics(rollout(cfg, make_pair_policy("zero", cfg), seeds), steady_window=2.0)
     ctrl = trace_metrics(rollout(cfg, make_pair_policy(name, cfg), seeds), steady_window=2.0)

@@ -96,10 +96,12 @@ def test_initial_state_respects_placement(small_config):
     core = PairFlockCore(cfg, num_envs=5)
     core.reset(seed=0)
     a, b = cfg.pairs[0]
-    np.testing.assert_array_equal(core.q[:, a], -cfg.pair_corner)
-    np.testing.assert_array_equal(core.q[:, b], cfg.pair_corner)
+    # the start box: centre and half-widths may differ per axis (paper-quadrotor: z = 20 m)
+    center, corner = cfg.vector("swarm_center"), cfg.vector("pair_corner")
+    np.testing.assert_array_equal(core.q[:, a], center - corner)
+    np.testing.assert_array_equal(core.q[:, b], center + corner)
     others = np.setdiff1d(np.arange(cfg.n_uavs), [a, b])
-    assert np.all(np.abs(core.q[:, others]) <= cfg.swarm_half_width)
+    assert np.all(np.abs(core.q[:, others] - center) <= cfg.vector("swarm_half_width"))
     d = np.linalg.norm(core.q[:, :, None] - core.q[:, None], axis=-1)
     d[:, np.arange(cfg.n_uavs), np.arange(cfg.n_uavs)] = np.inf
     assert d.min() >= cfg.min_init_spacing

@@ -75,26 +75,27 @@ def _same(a, b):
 @pytest.mark.parametrize(
     "make_actions, exc, needle",
     [
-        (lambda ok: {**ok, "uav_0": np.array([np.nan, 0.0])}, ValueError, "uav_0"),
-        (lambda ok: {**ok, "uav_1": np.array([0.0, np.inf])}, ValueError, "uav_1"),
-        (lambda ok: {**ok, "uav_0": np.zeros(3)}, ValueError, "uav_0"),
-        (lambda ok: {**ok, "uav_0": np.zeros((1, 2))}, ValueError, "shape"),
-        (lambda ok: {**ok, "uav_1": np.array(["a", "b"])}, TypeError, "uav_1"),
-        (lambda ok: {**ok, "uav_1": np.array([True, False])}, TypeError, "dtype"),
-        (lambda ok: {"uav_0": ok["uav_0"]}, ValueError, "uav_1"),
-        (lambda ok: {**ok, "uav_7": np.zeros(2)}, ValueError, "uav_7"),
-        (lambda ok: [ok["uav_0"], ok["uav_1"]], TypeError, "dict"),
-        (lambda ok: {**ok, "uav_0": None}, TypeError, "uav_0"),
+        (lambda ok, D: {**ok, "uav_0": np.r_[np.nan, np.zeros(D - 1)]}, ValueError, "uav_0"),
+        (lambda ok, D: {**ok, "uav_1": np.r_[np.zeros(D - 1), np.inf]}, ValueError, "uav_1"),
+        (lambda ok, D: {**ok, "uav_0": np.zeros(D + 1)}, ValueError, "uav_0"),
+        (lambda ok, D: {**ok, "uav_0": np.zeros((1, D))}, ValueError, "shape"),
+        (lambda ok, D: {**ok, "uav_1": np.array(["a"] * D)}, TypeError, "uav_1"),
+        (lambda ok, D: {**ok, "uav_1": np.arange(D) % 2 == 0}, TypeError, "dtype"),
+        (lambda ok, D: {"uav_0": ok["uav_0"]}, ValueError, "uav_1"),
+        (lambda ok, D: {**ok, "uav_7": np.zeros(D)}, ValueError, "uav_7"),
+        (lambda ok, D: [ok["uav_0"], ok["uav_1"]], TypeError, "dict"),
+        (lambda ok, D: {**ok, "uav_0": None}, TypeError, "uav_0"),
     ],
 )
-def test_bad_actions_raise_and_leave_the_env_unchanged(make_actions, exc, needle):
-    env = parallel_env(preset="paper", n_uavs=12)
+def test_bad_actions_raise_and_leave_the_env_unchanged(make_actions, exc, needle, small_kwargs):
+    env = parallel_env(**small_kwargs)
     env.reset(seed=0)
-    ok = {a: np.zeros(2, np.float32) for a in env.agents}
+    D = env.config.dim
+    ok = {a: np.zeros(D, np.float32) for a in env.agents}
     env.step(ok)
     before = _snapshot(env)
     with pytest.raises(exc, match=needle):
-        env.step(make_actions(ok))
+        env.step(make_actions(ok, D))
     assert _same(before, _snapshot(env))
     env.step(ok)  # still usable
 
@@ -107,33 +108,37 @@ def test_clipping_is_documented_behaviour():
     assert infos["uav_0"]["pair_accel"] == pytest.approx(np.hypot(20.0, 10.0))
 
 
-def test_step_before_reset_and_after_the_end_raise():
-    env = parallel_env(preset="paper", n_uavs=12, max_cycles=2)
+def test_step_before_reset_and_after_the_end_raise(small_kwargs):
+    env = parallel_env(**small_kwargs, max_cycles=2)
+    D = env.config.dim
     with pytest.raises(RuntimeError, match="reset"):
-        env.step({"uav_0": np.zeros(2), "uav_1": np.zeros(2)})
+        env.step({"uav_0": np.zeros(D), "uav_1": np.zeros(D)})
     env.reset(seed=1)
     for _ in range(2):
-        *_, truncs, _ = env.step({a: np.zeros(2) for a in env.agents})
+        *_, truncs, _ = env.step({a: np.zeros(D) for a in env.agents})
     assert all(truncs.values()) and env.agents == []
     with pytest.raises(RuntimeError, match="reset"):
         env.step({})
 
 
-def test_infos_hold_the_documented_keys():
-    env = parallel_env(preset="paper", n_uavs=12)
+def test_infos_hold_the_documented_keys(small_kwargs):
+    env = parallel_env(**small_kwargs)
+    cfg = env.config
     _, infos = env.reset(seed=0)
     required = {"pair_distance", "pair_error", "sliding_surface", "min_separation", "sim_time",
                 "collisions", "velocity_mismatch", "largest_component"}  # fmt: skip
     for a in env.agents:
         assert required <= set(infos[a])
     i0 = infos["uav_0"]
-    assert i0["pair_error"] == pytest.approx(i0["pair_distance"] - 5.0)
-    assert i0["pair_distance"] == pytest.approx(180 * np.sqrt(2))
+    d_m = cfg.d_m[0]
+    dist = 2 * np.linalg.norm(np.broadcast_to(cfg.vector("pair_corner"), (cfg.dim,)))
+    assert i0["pair_error"] == pytest.approx(i0["pair_distance"] - d_m)
+    assert i0["pair_distance"] == pytest.approx(dist)  # paper: 180 sqrt(2)
     # s = c (||y||^2 - d_m^2) + 2 y.y' with y' = 0 at rest
-    assert i0["sliding_surface"] == pytest.approx(4.0 * (2 * 180.0**2 - 25.0))
+    assert i0["sliding_surface"] == pytest.approx(cfg.surface_slope * (dist**2 - d_m**2))
     assert i0["sim_time"] == 0.0
-    obs, *_ , infos = env.step({a: np.zeros(2) for a in env.agents})
-    assert infos["uav_1"]["sim_time"] == pytest.approx(0.01)
+    obs, *_ , infos = env.step({a: np.zeros(cfg.dim) for a in env.agents})
+    assert infos["uav_1"]["sim_time"] == pytest.approx(cfg.dt)
     np.testing.assert_allclose(
         env.layout.get(obs["uav_0"], "partner_offset"),
         -env.layout.get(obs["uav_1"], "partner_offset"),
