@@ -1,25 +1,66 @@
-"""Paper-style figures (Figs. 4-14) from rollout traces; headless (Agg canvas, no display)."""
+"""Paper-style figures (Figs. 4-16) from rollout traces and metric rows; headless (Agg canvas,
+no display, no pyplot state).
+
+* :func:`snapshot_figure` - positions and headings at several times (Figs. 4, 8, 11; the last
+  panel with velocity arrows as Figs. 5, 9, 12);
+* :func:`surface_figure` / :func:`surface_panels_figure` - the sliding surface s(t) (Figs. 6, 13);
+* :func:`error_figure` - pair distance error of several policies on one axis (Fig. 10);
+* :func:`steady_error_figure` - box + strip plot of a per-run metric per scenario and policy;
+* :func:`trajectories_3d_figure` - 3-D trajectories (Fig. 16).
+"""
 
 from __future__ import annotations
 
+import io
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from pairflock_env.render import PAIR_COLORS, draw_swarm
+from pairflock_env.render import PAIR_COLORS, UNPAIRED_COLOR, draw_swarm
 
 from .io import atomic_write_bytes
 
-__all__ = ["save_figure", "snapshot_figure", "surface_figure", "error_figure", "POLICY_STYLE"]
+__all__ = [
+    "save_figure",
+    "snapshot_figure",
+    "surface_figure",
+    "surface_panels_figure",
+    "error_figure",
+    "steady_error_figure",
+    "trajectories_3d_figure",
+    "policy_styles",
+    "POLICY_STYLE",
+]
 
+#: the paper's comparison, drawn the same way in every figure
 POLICY_STYLE = {
     "smc": dict(color="tab:red", label="sliding mode (eq. 28)"),
     "proportional": dict(color="tab:blue", label="normal method (eq. 44)"),
     "zero": dict(color="0.4", label="no pair term"),
 }
+#: colours for every other policy spec, in order of appearance
+_EXTRA_COLORS = ("tab:green", "tab:purple", "tab:orange", "tab:brown", "tab:pink", "tab:olive",
+                 "tab:cyan")  # fmt: skip
+
+
+def policy_styles(labels: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """Colour and legend text for each policy label: the paper's three keep their colours,
+    other specs (gains, learned policies) take distinct ones."""
+    out: dict[str, dict[str, Any]] = {}
+    extra = iter(_EXTRA_COLORS * (1 + len(labels) // len(_EXTRA_COLORS)))
+    for lab in labels:
+        if lab in POLICY_STYLE:
+            out[lab] = dict(POLICY_STYLE[lab])
+            continue
+        text = lab
+        if lab.startswith("sb3:"):
+            text = f"learned ({Path(lab[4:]).stem})"
+        out[lab] = dict(color=next(extra), label=text)
+    return out
 
 
 def _style(policy: str) -> dict:
@@ -27,13 +68,16 @@ def _style(policy: str) -> dict:
 
 
 def save_figure(fig: Figure, path: str | Path, dpi: int = 110) -> Path:
-    """Render ``fig`` to PNG and write it atomically."""
-    import io
-
+    """Render ``fig`` to PNG and write it atomically (no timestamp in the file)."""
     FigureCanvasAgg(fig)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi, metadata={"Software": None})
     return atomic_write_bytes(Path(path), buf.getvalue())
+
+
+def _grid(n: int, ncols: int) -> tuple[int, int]:
+    cols = max(1, min(n, ncols))
+    return int(np.ceil(n / cols)), cols
 
 
 def snapshot_figure(
@@ -47,57 +91,83 @@ def snapshot_figure(
     title: str,
 ) -> Figure:
     """Positions and headings at several times (Figs. 4, 8, 11); the last panel shows
-    velocity arrows like Figs. 5, 9, 12."""
+    velocity arrows like Figs. 5, 9, 12. ``t`` are the sample times of ``positions``
+    (need not be evenly spaced); each panel shows the sample nearest to the asked time.
+    3-D states are drawn in the x-y plane."""
+    t = np.asarray(t, dtype=float)
     n = len(times)
-    cols = min(n, 2 if n == 4 else 3)
-    rows = int(np.ceil(n / cols))
+    rows, cols = _grid(n, 2 if n == 4 else 3)
     fig = Figure(figsize=(4.2 * cols, 4.0 * rows))
     headings = None
-    last = len(t) - 1
     for i, ti in enumerate(times):
-        k = min(int(round(ti / (t[1] - t[0]))), last)
+        k = int(np.argmin(np.abs(t - ti)))
         ax = fig.add_subplot(rows, cols, i + 1)
         headings = draw_swarm(
             ax, positions[k], velocities[k], pairs, d_m, leader_positions[k],
-            headings=headings, arrows=(i == n - 1), title=f"t = {t[k]:.1f} s",
+            headings=headings, arrows=(i == n - 1), title=f"t = {round(float(t[k]), 2):g} s",
         )  # fmt: skip
+        if positions.shape[-1] == 3:
+            ax.set_title(f"t = {round(float(t[k]), 2):g} s (x-y plane)", fontsize=10)
     fig.suptitle(title)
     fig.tight_layout()
     return fig
 
 
-def surface_figure(series: Mapping[str, tuple[np.ndarray, np.ndarray]], t_max: float, title: str) -> Figure:
-    """Sliding surface s(t) (Figs. 6, 13): one line per label, symlog axis."""
-    fig = Figure(figsize=(6.4, 3.8))
-    ax = fig.add_subplot(1, 1, 1)
-    for i, (label, (t, s)) in enumerate(series.items()):
-        m = t <= t_max
-        ax.plot(t[m], s[m], lw=1.2, label=label, color=PAIR_COLORS[i % len(PAIR_COLORS)])
-    ax.set_yscale("symlog", linthresh=10.0)
-    ax.axhline(0.0, color="k", lw=0.6)
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("s (m$^2$/s)")
-    ax.set_title(title, fontsize=10)
-    ax.grid(True, lw=0.3)
-    ax.legend(fontsize=8)
+def surface_panels_figure(
+    panels: Mapping[str, Mapping[str, tuple[np.ndarray, np.ndarray]]],
+    t_max: float,
+    title: str,
+    *,
+    ncols: int = 3,
+) -> Figure:
+    """Sliding surface s(t) (Figs. 6, 13): panel title -> line label -> (t, s); symlog axis
+    (s starts near 1e5 m^2/s and chatters around 0)."""
+    rows, cols = _grid(len(panels), ncols)
+    fig = Figure(figsize=(5.6 * cols, 3.6 * rows + 0.5))
+    for i, (ptitle, series) in enumerate(panels.items()):
+        ax = fig.add_subplot(rows, cols, i + 1)
+        for c, (label, (t, s)) in enumerate(series.items()):
+            m = t <= t_max
+            ax.plot(t[m], s[m], lw=0.8, alpha=0.8, label=label,
+                    color=PAIR_COLORS[c % len(PAIR_COLORS)])
+        ax.set_yscale("symlog", linthresh=10.0)
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel("s (m$^2$/s)")
+        ax.set_title(ptitle, fontsize=10)
+        ax.grid(True, lw=0.3)
+        ax.legend(fontsize=8)
+    fig.suptitle(title)
     fig.tight_layout()
     return fig
 
 
+def surface_figure(
+    series: Mapping[str, tuple[np.ndarray, np.ndarray]], t_max: float, title: str
+) -> Figure:
+    """Sliding surface s(t) (Figs. 6, 13): one line per label, one panel."""
+    fig = surface_panels_figure({"": series}, t_max, title)
+    return fig
+
+
 def error_figure(
-    panels: Mapping[str, Mapping[str, tuple[np.ndarray, np.ndarray]]], title: str
+    panels: Mapping[str, Mapping[str, tuple[np.ndarray, np.ndarray]]],
+    title: str,
+    *,
+    styles: Mapping[str, Mapping[str, Any]] | None = None,
+    ncols: int = 3,
 ) -> Figure:
     """Pair distance error ||y|| - d_m over time, several policies per panel (Fig. 10).
 
     ``panels``: panel title -> policy -> (t, error). Symlog axis: the error starts near
-    250 m and ends near 0.1 m.
+    250 m and ends near 0.1 m; dashed lines mark the +-0.5 m band.
     """
-    n = len(panels)
-    fig = Figure(figsize=(5.2 * n, 3.8))
+    rows, cols = _grid(len(panels), ncols)
+    fig = Figure(figsize=(5.4 * cols, 3.6 * rows + 0.5))
     for i, (ptitle, curves) in enumerate(panels.items()):
-        ax = fig.add_subplot(1, n, i + 1)
+        ax = fig.add_subplot(rows, cols, i + 1)
         for policy, (t, e) in curves.items():
-            st = _style(policy)
+            st = (styles or {}).get(policy) or _style(policy)
             ax.plot(t, e, lw=1.0, color=st.get("color"), label=st["label"])
         ax.set_yscale("symlog", linthresh=0.1)
         ax.axhline(0.0, color="k", lw=0.6)
@@ -109,5 +179,104 @@ def error_figure(
         ax.grid(True, lw=0.3)
         ax.legend(fontsize=8)
     fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def steady_error_figure(
+    values: Mapping[tuple[str, str], Sequence[float]],
+    scenarios: Sequence[str],
+    policies: Sequence[str],
+    ylabel: str,
+    title: str,
+    *,
+    styles: Mapping[str, Mapping[str, Any]] | None = None,
+    log: bool = True,
+) -> Figure:
+    """Box plot with every run as a dot, grouped by scenario, one colour per policy.
+
+    ``values[(scenario, policy)]``: one number per run (NaN runs are left out and counted in
+    the x label). Log axis by default: the policies differ by orders of magnitude.
+    """
+    styles = dict(styles or policy_styles(policies))
+    P = len(policies)
+    width = 0.8 / P
+    fig = Figure(figsize=(max(5.0, 1.1 + 0.45 * P * len(scenarios) + 0.5 * len(scenarios)), 4.2))
+    ax = fig.add_subplot(1, 1, 1)
+    labels = []
+    for i, sc in enumerate(scenarios):
+        missing = 0
+        for j, pol in enumerate(policies):
+            v = np.asarray(values.get((sc, pol), ()), dtype=float)
+            missing += int(np.sum(~np.isfinite(v)))
+            v = v[np.isfinite(v)]
+            if v.size == 0:
+                continue
+            x = i + (j - (P - 1) / 2) * width
+            color = styles[pol]["color"]
+            bp = ax.boxplot([v], positions=[x], widths=width * 0.8, whis=(0, 100),
+                            patch_artist=True, manage_ticks=False)  # fmt: skip
+            for box in bp["boxes"]:
+                box.set(facecolor=color, alpha=0.25, edgecolor=color)
+            for part in ("whiskers", "caps", "medians"):
+                for line in bp[part]:
+                    line.set(color=color, lw=1.2 if part == "medians" else 0.8)
+            # deterministic spread of the dots across the box width
+            jitter = np.linspace(-0.3, 0.3, v.size) * width if v.size > 1 else np.zeros(1)
+            ax.plot(x + jitter, v, "o", ms=3, color=color, mec="k", mew=0.3, alpha=0.9)
+        labels.append(sc if not missing else f"{sc}\n({missing} runs: never)")
+    for pol in policies:
+        ax.plot([], [], "s", color=styles[pol]["color"], alpha=0.6, label=styles[pol]["label"])
+    ax.set_xticks(range(len(scenarios)))
+    long = max((len(s) for s in scenarios), default=0) > 12
+    ax.set_xticklabels(labels, rotation=25 if long else 0, ha="right" if long else "center",
+                       fontsize=8)  # fmt: skip
+    ax.set_xlim(-0.6, len(scenarios) - 0.4)
+    if log:
+        ax.set_yscale("log")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, axis="y", which="both", lw=0.3)
+    ax.legend(fontsize=8, loc="best")
+    fig.tight_layout()
+    return fig
+
+
+def trajectories_3d_figure(
+    positions: np.ndarray,
+    leader_positions: np.ndarray,
+    pairs,
+    title: str,
+) -> Figure:
+    """3-D trajectories (Fig. 16): every UAV in grey, the pairs in colour, the leader dashed;
+    a dot marks each start and a triangle each end."""
+    positions = np.asarray(positions, dtype=float)
+    if positions.ndim != 3 or positions.shape[-1] != 3:
+        raise ValueError(f"positions has shape {positions.shape}; expected (T, N, 3) (dim = 3)")
+    fig = Figure(figsize=(6.4, 5.6))
+    ax = fig.add_subplot(1, 1, 1, projection="3d")
+    paired = {i: k for k, pr in enumerate(pairs) for i in pr}
+    for i in range(positions.shape[1]):
+        xyz = positions[:, i]
+        if i in paired:
+            continue
+        ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], lw=0.5, color=UNPAIRED_COLOR, alpha=0.45)
+    for i, k in sorted(paired.items()):
+        xyz = positions[:, i]
+        color = PAIR_COLORS[k % len(PAIR_COLORS)]
+        first = i == pairs[k][0]
+        label = f"pair {k} (UAVs {pairs[k][0]}, {pairs[k][1]})" if first else None
+        ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], lw=1.4, color=color, label=label)
+    ends = positions[-1]
+    ax.scatter(*positions[0].T, s=6, color="0.3", depthshade=False)
+    ax.scatter(*ends.T, s=14, marker="^", color="0.1", depthshade=False)
+    lq = np.asarray(leader_positions, dtype=float)
+    ax.plot(lq[:, 0], lq[:, 1], lq[:, 2], "k--", lw=1.2, label="virtual leader")
+    ax.scatter(*lq[-1], marker="*", s=160, color="gold", edgecolor="k", depthshade=False)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_zlabel("z (m)")
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
     return fig

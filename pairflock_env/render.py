@@ -13,7 +13,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["SwarmRenderer", "draw_swarm", "triangle_markers", "PAIR_COLORS"]
+__all__ = ["SwarmRenderer", "draw_swarm", "fit_limits", "triangle_markers", "PAIR_COLORS"]
 
 PAIR_COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown")
 UNPAIRED_COLOR = "0.35"
@@ -36,6 +36,20 @@ def _headings(p: np.ndarray, prev: np.ndarray | None) -> np.ndarray:
     else:
         h = np.where(speed > 1e-6, h, math.pi / 2)
     return h
+
+
+def fit_limits(
+    q: np.ndarray, leader_q: np.ndarray | None = None, min_span: float = 10.0
+) -> tuple[float, float, float, float]:
+    """Square x-y view (xmin, xmax, ymin, ymax) around every UAV and the leader, with a
+    margin; never narrower than ``min_span`` metres."""
+    xy = np.asarray(q, dtype=float)[:, :2]
+    pts = xy if leader_q is None else np.vstack([xy, np.asarray(leader_q, dtype=float)[None, :2]])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    span = max(float(np.max(hi - lo)), min_span)
+    mid = (lo + hi) / 2
+    half = 0.55 * span + 2.0
+    return (mid[0] - half, mid[0] + half, mid[1] - half, mid[1] + half)
 
 
 def draw_swarm(
@@ -70,12 +84,7 @@ def draw_swarm(
     p = np.asarray(p, dtype=float)
     xy = q[:, :2]
     if limits is None:
-        pts = xy if leader_q is None else np.vstack([xy, np.asarray(leader_q)[None, :2]])
-        lo, hi = pts.min(axis=0), pts.max(axis=0)
-        span = max(float(np.max(hi - lo)), 10.0)
-        mid = (lo + hi) / 2
-        half = 0.55 * span + 2.0
-        limits = (mid[0] - half, mid[0] + half, mid[1] - half, mid[1] + half)
+        limits = fit_limits(q, leader_q)
     span = max(limits[1] - limits[0], limits[3] - limits[2])
     if size is None:
         size = 0.025 * span
@@ -137,20 +146,23 @@ class SwarmRenderer:
         self._fig.clear()
         return self._fig
 
-    def rgb_array(self, q, p, leader_q, title: str | None = None) -> np.ndarray:
+    def rgb_array(self, q, p, leader_q, title: str | None = None, *, limits=None) -> np.ndarray:
+        """One frame (H, W, 3) uint8 of swarm state q, p (N, dim); ``limits`` as in
+        :func:`draw_swarm` (default: fit this frame)."""
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
         fig = self._figure()
         canvas = FigureCanvasAgg(fig)
         ax = fig.add_subplot(1, 1, 1)
         self._headings = draw_swarm(
-            ax, q, p, self.pairs, self.d_m, leader_q, headings=self._headings, title=title
+            ax, q, p, self.pairs, self.d_m, leader_q, headings=self._headings, title=title,
+            limits=limits,
         )
         fig.tight_layout()
         canvas.draw()
         return np.asarray(canvas.buffer_rgba())[..., :3].copy()
 
-    def human(self, q, p, leader_q, title: str | None = None) -> None:
+    def human(self, q, p, leader_q, title: str | None = None, *, limits=None) -> None:
         import matplotlib
         import matplotlib.pyplot as plt
 
@@ -170,7 +182,8 @@ class SwarmRenderer:
         fig.clear()
         ax = fig.add_subplot(1, 1, 1)
         self._headings = draw_swarm(
-            ax, q, p, self.pairs, self.d_m, leader_q, headings=self._headings, title=title
+            ax, q, p, self.pairs, self.d_m, leader_q, headings=self._headings, title=title,
+            limits=limits,
         )
         fig.canvas.draw_idle()
         plt.pause(0.001)

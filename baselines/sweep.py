@@ -1,0 +1,179 @@
+"""Jobs of a benchmark sweep and the backends that run them (local processes or Ray).
+
+A job is one (scenario, policy) over a block of seeds, run as one batched core through
+:func:`baselines.rollout.rollout`. A swarm's result depends only on its config, policy and
+seed (each swarm has its own generator; nothing in a step mixes swarms), so it does not
+matter how seeds are grouped into jobs or where a job runs: the local and the Ray backend
+return identical numbers, and ``tests/test_benchmark.py`` checks both properties.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+import numpy as np
+
+from pairflock_env import PairFlockConfig
+
+from .specs import PolicySpec
+
+__all__ = ["Job", "make_jobs", "run_job", "run_jobs", "BACKENDS", "pin_threads"]
+
+BACKENDS = ("local", "ray")
+
+
+def pin_threads() -> None:
+    """One BLAS/OpenMP thread per process: the parallelism is across processes."""
+    for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+
+
+@dataclasses.dataclass(frozen=True)
+class Job:
+    """One (scenario, policy) over ``seeds``; ``record_seed`` (if any) keeps its trajectory
+    every ``record_stride`` control steps for figures and video."""
+
+    scenario: int
+    policy: int
+    config: PairFlockConfig
+    spec: PolicySpec
+    seeds: tuple[int, ...]
+    record_seed: int | None = None
+    record_stride: int = 1
+    metric_kwargs: tuple[tuple[str, Any], ...] = ()
+
+    @property
+    def cost(self) -> float:
+        """Rough relative cost, to start the slowest jobs first."""
+        c = self.config
+        return len(self.seeds) * c.episode_steps * c.n_uavs * c.n_uavs
+
+
+def make_jobs(
+    configs: Sequence[PairFlockConfig],
+    specs: Sequence[PolicySpec],
+    seeds: Sequence[int],
+    *,
+    batch_size: int | None = None,
+    record: Callable[[int, int], bool] = lambda i, j: False,
+    record_stride: Callable[[PairFlockConfig], int] = lambda cfg: 1,
+    metric_kwargs: dict[str, Any] | None = None,
+) -> list[Job]:
+    """Every (scenario i, policy j) x seed block; the first seed is recorded where
+    ``record(i, j)``. Every policy gets the same seeds, hence the same initial states."""
+    seeds = tuple(int(s) for s in seeds)
+    bs = len(seeds) if batch_size is None else int(batch_size)
+    if bs < 1:
+        raise ValueError(f"batch_size={batch_size!r} is invalid: must be >= 1")
+    mk = tuple(sorted((metric_kwargs or {}).items()))
+    jobs = []
+    for i, cfg in enumerate(configs):
+        for j, spec in enumerate(specs):
+            for start in range(0, len(seeds), bs):
+                block = seeds[start : start + bs]
+                rec = seeds[0] if (start == 0 and record(i, j)) else None
+                jobs.append(Job(i, j, cfg, spec, block, rec, record_stride(cfg), mk))
+    return jobs
+
+
+def run_job(job: Job) -> dict[str, Any]:
+    """Simulate one job; returns its metric rows and, for the recorded seed, the series.
+
+    Top-level and free of closures so that process pools and Ray can ship it.
+    """
+    pin_threads()
+    from .rollout import rollout, trace_metrics
+
+    policy = job.spec.build(job.config)
+    rec_rows = () if job.record_seed is None else (job.seeds.index(job.record_seed),)
+    tr = rollout(job.config, policy, job.seeds, record_rows=rec_rows)
+    out: dict[str, Any] = {
+        "scenario": job.scenario,
+        "policy": job.policy,
+        "rows": trace_metrics(tr, **dict(job.metric_kwargs)),
+    }
+    if rec_rows:
+        r = rec_rows[0]
+        k = np.arange(0, len(tr.t), job.record_stride)
+        if k[-1] != len(tr.t) - 1:
+            k = np.append(k, len(tr.t) - 1)  # always keep the final state
+        out["trace"] = {
+            "seed": job.record_seed,
+            "t": tr.t,
+            "pair_error": tr.pair_error[r],
+            "surface": tr.surface[r],
+            "frame_t": tr.t[k],
+            "positions": tr.positions[r][k].astype(np.float32),
+            "velocities": tr.velocities[r][k].astype(np.float32),
+            "leader_positions": tr.leader_positions[r][k].astype(np.float32),
+        }
+    return out
+
+
+def _local(jobs: Sequence[Job], workers: int) -> Iterator[tuple[Job, dict[str, Any]]]:
+    if workers <= 1 or len(jobs) == 1:
+        for job in jobs:
+            yield job, run_job(job)
+        return
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    with ProcessPoolExecutor(max_workers=min(workers, len(jobs))) as pool:
+        futs = {pool.submit(run_job, job): job for job in jobs}
+        try:
+            for f in as_completed(futs):
+                yield futs[f], f.result()
+        except BaseException:
+            for f in futs:
+                f.cancel()
+            raise
+
+
+def _ray(
+    jobs: Sequence[Job], workers: int, address: str | None
+) -> Iterator[tuple[Job, dict[str, Any]]]:
+    try:
+        import ray
+    except ImportError:
+        raise ImportError(
+            "--backend ray needs Ray: pip install 'pairflock-env[ray]'"
+        ) from None
+    started = False
+    if not ray.is_initialized():
+        kwargs: dict[str, Any] = dict(include_dashboard=False, log_to_driver=False)
+        if address:
+            kwargs["address"] = address
+        else:
+            kwargs["num_cpus"] = workers
+        ray.init(**kwargs)
+        started = True
+    try:
+        task = ray.remote(num_cpus=1)(run_job)
+        pending = {task.remote(job): job for job in jobs}
+        while pending:
+            done, _ = ray.wait(list(pending), num_returns=1)
+            for ref in done:
+                yield pending.pop(ref), ray.get(ref)
+    finally:
+        if started:
+            ray.shutdown()
+
+
+def run_jobs(
+    jobs: Sequence[Job],
+    *,
+    backend: str = "local",
+    workers: int = 1,
+    ray_address: str | None = None,
+) -> Iterator[tuple[Job, dict[str, Any]]]:
+    """Run ``jobs`` (slowest first) and yield ``(job, result)`` as they finish."""
+    if backend not in BACKENDS:
+        raise ValueError(f"backend={backend!r} is invalid: must be one of {', '.join(BACKENDS)}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers={workers!r} is invalid: must be an integer >= 1")
+    order = sorted(jobs, key=lambda j: -j.cost)
+    if backend == "ray":
+        return _ray(order, workers, ray_address)
+    return _local(order, workers)
