@@ -55,6 +55,7 @@ def rollout(
     record_rows: Sequence[int] = (),
     steps: int | None = None,
     progress: Callable[[int], None] | None = None,
+    on_step: Callable[[int, PairFlockCore, Any, np.ndarray], None] | None = None,
 ) -> Trace:
     """Run one episode per seed, all swarms in one batched core.
 
@@ -63,6 +64,10 @@ def rollout(
         seeds: one seed per swarm.  record_rows: swarms whose full state is kept for figures.
         steps: control steps (default: the episode length).  progress: called with the number
             of steps done since the last call.
+        on_step: optional recorder ``on_step(k, core, result, live)`` called after the reset
+            (k = 0) and after every step k with the core, its :class:`StepResult` and the
+            (B,) mask of swarms still running; for series the trace does not keep (e.g. the
+            quadrotor attitude). It must not change the core.
     """
     seeds = [int(s) for s in seeds]
     core = PairFlockCore(config, num_envs=len(seeds))
@@ -113,6 +118,8 @@ def rollout(
                     tr.leader_positions[r][k] = lq[r]
 
     record(0, res, ~done)
+    if on_step is not None:
+        on_step(0, core, res, ~done)
     limit = config.pair_accel_limit
     report_every = max(1, T // 50)
     last_report = 0
@@ -125,6 +132,8 @@ def rollout(
         tr.u[live, :, k - 1] = np.clip(actions[live], -1.0, 1.0) * limit
         tr.clipped_steps[live] += res.info["action_clipped"][live]
         record(k, res, live)
+        if on_step is not None:
+            on_step(k, core, res, live)
         ended_now = live & (res.terminated | res.truncated)
         if k < T and ended_now.any():
             # freeze the finished swarms' series at their last value

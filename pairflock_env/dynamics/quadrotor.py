@@ -25,9 +25,12 @@ Per physics step of length h, for each UAV:
        F = m (a_c + g e3) + k_d p
    tilt cone: F_z >= m g / 10 and ||F_xy|| <= F_z tan(theta_max) (the horizontal part is
    scaled down; vertical takes priority, so altitude holds while a lateral command is cut).
-3. Desired attitude (Lee et al., eqs. 12-13) with a fixed heading psi:
-       b3d = F / ||F||,  b1c = (cos psi, sin psi, 0),
-       b2d = b3d x b1c / ||b3d x b1c||,  b1d = b2d x b3d,  R_d = [b1d b2d b3d]
+3. Desired attitude with a fixed heading psi (Lee et al. build b1d from b1c; here the
+   heading enters through the body y axis so that the ZYX yaw of R_d is exactly psi, the
+   usual Euler convention of the attitude plots):
+       b3d = F / ||F||,  b2c = (-sin psi, cos psi, 0),
+       b1d = b2c x b3d / ||b2c x b3d||,  b2d = b3d x b1d,  R_d = [b1d b2d b3d]
+   (well defined while the tilt stays below 90 degrees, which the tilt cone ensures).
 4. Collective thrust and moments (Lee et al., eqs. 15-16, desired body rates 0):
        f = F . R e3
        e_R = 1/2 vee(R_d^T R - R^T R_d),   e_w = w
@@ -37,7 +40,12 @@ Per physics step of length h, for each UAV:
        [f, Mx, My, Mz] = A [T_0..T_3],  A = [[1, 1, 1, 1], d [1, 1, -1, -1],
                                             d [-1, 1, 1, -1], kappa [1, -1, 1, -1]]
    with kappa = k_m / k_f (m). The rows are orthogonal, so T = A^T diag(1/4, 1/4d^2, 1/4d^2,
-   1/4kappa^2) [f, M]. Each T_i is clipped to [T_min, T_max] (reported as ``motor_saturated``).
+   1/4kappa^2) [f, M] = f/4 + delta(M). When a rotor would leave [T_min, T_max] the mixer
+   desaturates, giving up thrust before attitude (reported as ``motor_saturated``): if the
+   spread max(delta) - min(delta) exceeds T_max - T_min, the moments are scaled down together
+   (their direction is kept); then the collective f/4 is shifted by the least amount that
+   brings every rotor into range. (Plain per-rotor clipping distorts the moments just when
+   the attitude loop needs them, which lengthens the sliding-mode limit cycle of the pair.)
 6. Motors: first-order lag on rotor speed towards W_c = sqrt(T_i / k_f), solved exactly
    over the step: W <- W + (W_c - W)(1 - exp(-h / tau)); the rotors then produce
    T_i = k_f W_i^2 and, through A, the moments (Mx, My, Mz) acting on the body.
@@ -119,11 +127,59 @@ class QuadrotorParams:
         v[_COSCRASH], v[_GROUND] = math.cos(self.crash_tilt), self.ground
         self.vector = v
 
+    def mix(self, f: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The mixer of the kernel over arrays: rotor thrusts (..., 4) (N) and a saturation
+        flag (...,) for collective thrusts f (...,) (N) and body moments M (..., 3) (N m)."""
+        f = np.asarray(f, dtype=np.float64)
+        M = np.asarray(M, dtype=np.float64)
+        if M.shape != f.shape + (3,):
+            raise ValueError(f"M has shape {M.shape}; expected f.shape + (3,) = {f.shape + (3,)}")
+        ff = np.ascontiguousarray(f.reshape(-1))
+        T = np.empty((ff.shape[0], 4))
+        sat = np.empty(ff.shape[0], np.bool_)
+        _mix_rows(ff, np.ascontiguousarray(M.reshape(-1, 3)), 0.25 / self.d, 0.25 / self.kappa,
+                  self.t_min, self.t_max, T, sat)  # fmt: skip
+        return T.reshape(f.shape + (4,)), sat.reshape(f.shape)
+
     def mixer_matrix(self) -> np.ndarray:
         """A (4, 4): [f, Mx, My, Mz] = A @ [T_0, T_1, T_2, T_3] (N, N m)."""
         ang = np.radians(ROTOR_ANGLES_DEG)
         x, y = self.arm * np.cos(ang), self.arm * np.sin(ang)
         return np.stack([np.ones(4), y, -x, self.kappa * np.asarray(ROTOR_SPIN)])
+
+
+@njit(cache=True, inline="always")
+def _mix(f, mx, my, mz, inv4d, inv4k, tmin, tmax):
+    """Rotor thrusts (t0, t1, t2, t3, saturated) for collective thrust f and moments M."""
+    d0 = inv4d * (mx - my) + inv4k * mz
+    d1 = inv4d * (mx + my) - inv4k * mz
+    d2 = inv4d * (my - mx) + inv4k * mz
+    d3 = -inv4d * (mx + my) - inv4k * mz
+    base = 0.25 * f
+    hi = max(max(d0, d1), max(d2, d3))
+    lo = min(min(d0, d1), min(d2, d3))
+    if base + lo >= tmin and base + hi <= tmax:
+        return base + d0, base + d1, base + d2, base + d3, False
+    span = hi - lo
+    if span > tmax - tmin:  # not even the moments fit: scale them, keep their direction
+        sc = (tmax - tmin) / span
+        d0 *= sc
+        d1 *= sc
+        d2 *= sc
+        d3 *= sc
+        hi *= sc
+        lo *= sc
+    base = min(max(base, tmin - lo), tmax - hi)  # least change of the collective thrust
+    return (min(max(base + d0, tmin), tmax), min(max(base + d1, tmin), tmax),
+            min(max(base + d2, tmin), tmax), min(max(base + d3, tmin), tmax), True)  # fmt: skip
+
+
+@njit(cache=True)
+def _mix_rows(f, M, inv4d, inv4k, tmin, tmax, T, sat):
+    for i in range(f.shape[0]):
+        t0, t1, t2, t3, s = _mix(f[i], M[i, 0], M[i, 1], M[i, 2], inv4d, inv4k, tmin, tmax)
+        T[i, 0], T[i, 1], T[i, 2], T[i, 3] = t0, t1, t2, t3
+        sat[i] = s
 
 
 @njit(cache=True, nogil=True)
@@ -192,14 +248,14 @@ def _quadrotor_kernel(q, p, a_des, R, w, rotor, crashed, R_des, saturated, limit
                 fn = math.sqrt(fx * fx + fy * fy + fz * fz)
                 # 3. desired attitude R_d = [b1 b2 b3]
                 b30, b31, b32 = fx / fn, fy / fn, fz / fn
-                c0 = b31 * 0.0 - b32 * spsi  # b3 x (cos psi, sin psi, 0)
-                c1 = b32 * cpsi - b30 * 0.0
-                c2 = b30 * spsi - b31 * cpsi
+                c0 = cpsi * b32  # (-sin psi, cos psi, 0) x b3
+                c1 = spsi * b32
+                c2 = -spsi * b31 - cpsi * b30
                 cn = math.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
-                b20, b21, b22 = c0 / cn, c1 / cn, c2 / cn
-                b10 = b21 * b32 - b22 * b31
-                b11 = b22 * b30 - b20 * b32
-                b12 = b20 * b31 - b21 * b30
+                b10, b11, b12 = c0 / cn, c1 / cn, c2 / cn
+                b20 = b31 * b12 - b32 * b11  # b3 x b1
+                b21 = b32 * b10 - b30 * b12
+                b22 = b30 * b11 - b31 * b10
                 # 4. collective thrust and moments; E = R_d^T R
                 f = fx * r02 + fy * r12 + fz * r22
                 e01 = b10 * r01 + b11 * r11 + b12 * r21
@@ -218,18 +274,10 @@ def _quadrotor_kernel(q, p, a_des, R, w, rotor, crashed, R_des, saturated, limit
                 mx = -krx * erx - kwx * wx + gx
                 my = -kry * ery - kwy * wy + gy
                 mz = -krz * erz - kwz * wz + gz
-                # 5. mixer with clipping
-                t0 = 0.25 * f + inv4d * (mx - my) + inv4k * mz
-                t1 = 0.25 * f + inv4d * (mx + my) - inv4k * mz
-                t2 = 0.25 * f + inv4d * (my - mx) + inv4k * mz
-                t3 = 0.25 * f - inv4d * (mx + my) - inv4k * mz
-                if t0 < tmin or t0 > tmax or t1 < tmin or t1 > tmax or t2 < tmin or t2 > tmax \
-                        or t3 < tmin or t3 > tmax:  # fmt: skip
+                # 5. mixer with desaturation
+                t0, t1, t2, t3, sat = _mix(f, mx, my, mz, inv4d, inv4k, tmin, tmax)
+                if sat:
                     saturated[b, n] = True
-                    t0 = min(max(t0, tmin), tmax)
-                    t1 = min(max(t1, tmin), tmax)
-                    t2 = min(max(t2, tmin), tmax)
-                    t3 = min(max(t3, tmin), tmax)
                 # 6. motors: exact first-order lag on rotor speed, then the rotor forces
                 o0 += alpha * (math.sqrt(t0 / kf) - o0)
                 o1 += alpha * (math.sqrt(t1 / kf) - o1)

@@ -1,0 +1,182 @@
+"""Figures of the quadrotor experiment in the style of Figs. 15-20 (headless, Agg canvas).
+
+Each function returns a matplotlib ``Figure``; ``baselines.figures.save_figure`` writes it.
+Swarm snapshots reuse ``pairflock_env.render.draw_swarm`` (triangles along the heading, the
+pair circled with radius d_m, the leader as a star).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from pairflock_env.math3d import euler_zyx
+from pairflock_env.render import PAIR_COLORS, UNPAIRED_COLOR, draw_swarm
+
+__all__ = [
+    "snapshots_figure",
+    "trajectories_figure",
+    "surface_figure",
+    "pair_error_figure",
+    "euler_figure",
+]
+
+_STYLE = {
+    ("quadrotor", "smc"): dict(color="tab:red", label="quadrotor, sliding mode"),
+    ("quadrotor", "proportional"): dict(color="tab:blue", label="quadrotor, normal method"),
+    ("quadrotor", "zero"): dict(color="0.45", label="quadrotor, no pair term"),
+    ("particle", "smc"): dict(color="tab:orange", ls="--", label="particle, sliding mode"),
+    ("particle", "proportional"): dict(color="tab:cyan", ls="--", label="particle, normal method"),
+    ("particle", "zero"): dict(color="0.7", ls="--", label="particle, no pair term"),
+}
+
+
+def _nearest(t: np.ndarray, ti: float) -> int:
+    return int(np.argmin(np.abs(np.asarray(t) - ti)))
+
+
+def snapshots_figure(t, positions, velocities, leader_positions, pairs, d_m,
+                     times: Sequence[float], title: str) -> Figure:  # fmt: skip
+    """Positions and headings (x-y plane) at several times (Fig. 15), one panel each, with
+    the mean altitude in the panel title and velocity arrows (1 m/s = 0.4 m) on the last."""
+    n = len(times)
+    cols = min(n, 4)
+    rows = int(np.ceil(n / cols))
+    fig = Figure(figsize=(3.6 * cols, 3.6 * rows))
+    headings = None
+    for i, ti in enumerate(times):
+        k = _nearest(t, ti)
+        ax = fig.add_subplot(rows, cols, i + 1)
+        q, p = positions[k], velocities[k]
+        headings = draw_swarm(ax, q, p, pairs, d_m, leader_positions[k], headings=headings,
+                              size=0.8, title=f"t = {t[k]:.0f} s, z = {q[:, 2].mean():.1f} m")  # fmt: skip
+        if i == n - 1:
+            ax.quiver(q[:, 0], q[:, 1], p[:, 0], p[:, 1], color="0.3", width=0.004,
+                      angles="xy", scale_units="xy", scale=2.5)  # fmt: skip
+        ax.tick_params(labelsize=7)
+        ax.xaxis.label.set_size(8)
+        ax.yaxis.label.set_size(8)
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
+def trajectories_figure(t, positions, leader_positions, pairs, title: str,
+                        marks: Sequence[float] = (0.0, 20.0, 35.0, 50.0)) -> Figure:  # fmt: skip
+    """3-D trajectories (Fig. 16): unpaired UAVs grey, the pair in colour, the leader dashed;
+    the swarm's positions are dotted at the ``marks`` times."""
+    positions = np.asarray(positions, dtype=float)
+    fig = Figure(figsize=(7.4, 6.0))
+    ax = fig.add_subplot(1, 1, 1, projection="3d")
+    paired = {i: k for k, pr in enumerate(pairs) for i in pr}
+    for i in range(positions.shape[1]):
+        xyz = positions[:, i]
+        if i in paired:
+            k = paired[i]
+            ax.plot(*xyz.T, lw=1.1, color=PAIR_COLORS[k % len(PAIR_COLORS)],
+                    label=f"paired UAVs {pairs[k][0] + 1}, {pairs[k][1] + 1}"
+                    if i == pairs[k][0] else None)  # fmt: skip
+        else:
+            ax.plot(*xyz.T, lw=0.6, color=UNPAIRED_COLOR, alpha=0.6,
+                    label="other UAVs" if i == min(set(range(positions.shape[1])) - set(paired))
+                    else None)  # fmt: skip
+    lq = np.asarray(leader_positions, dtype=float)
+    ax.plot(*lq.T, "k--", lw=1.0, label="virtual leader")
+    for tm in marks:
+        k = _nearest(t, tm)
+        ax.scatter(*positions[k].T, s=7, color="k", depthshade=False)
+        ax.text(*(lq[k] + np.array([0.0, 0.0, 3.0])), f"{t[k]:.0f} s", fontsize=7)
+    ax.scatter(*lq[-1], marker="*", s=120, color="gold", edgecolor="k", depthshade=False)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_zlabel("z (m)")
+    ax.set_title(title, fontsize=10)
+    ax.legend(fontsize=8, loc="upper left")
+    ax.view_init(elev=25, azim=-60)
+    fig.tight_layout()
+    return fig
+
+
+def surface_figure(series: Mapping[str, tuple[np.ndarray, np.ndarray]], title: str) -> Figure:
+    """Sliding surface s(t) (Fig. 17): one panel per label (symlog axis, shared scale), since
+    the chattering of sign(s) makes overlaid curves unreadable."""
+    n = len(series)
+    fig = Figure(figsize=(7.0, 2.4 * n + 0.6))
+    axes = []
+    for i, (label, (t, s)) in enumerate(series.items()):
+        ax = fig.add_subplot(n, 1, i + 1, sharey=axes[0] if axes else None)
+        axes.append(ax)
+        ax.plot(t, s, lw=0.6, color=PAIR_COLORS[i % len(PAIR_COLORS)])
+        ax.set_yscale("symlog", linthresh=1.0)
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_ylabel("s (m$^2$/s)")
+        ax.set_title(label, fontsize=9)
+        ax.grid(True, lw=0.3)
+    axes[-1].set_xlabel("time (s)")
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
+def pair_error_figure(curves: Mapping[tuple[str, str], tuple[np.ndarray, np.ndarray]],
+                      straight_windows, band: float, title: str) -> Figure:  # fmt: skip
+    """Pair distance error over time (Fig. 18): the whole run on a symlog axis, and from 5 s
+    on a linear axis with the straight-flight windows shaded and the +-band lines."""
+    fig = Figure(figsize=(12.0, 4.0))
+    ax1 = fig.add_subplot(1, 2, 1)
+    ax2 = fig.add_subplot(1, 2, 2)
+    rank = {"smc": 0, "proportional": 1, "zero": 2}
+    order = sorted(curves, key=lambda k: (k[0] != "quadrotor", rank.get(k[1], 3), k[1]))
+    for key in order:
+        t, e = curves[key]
+        st = _STYLE.get(key, dict(label=f"{key[0]}, {key[1]}"))
+        for ax in (ax1, ax2):
+            ax.plot(t, e, lw=0.9, color=st.get("color"), ls=st.get("ls", "-"),
+                    label=st["label"])  # fmt: skip
+    ax1.set_yscale("symlog", linthresh=0.5)
+    ax1.set_title("whole run", fontsize=9)
+    t_end = max(float(c[0][-1]) for c in curves.values())
+    ax2.set_xlim(5.0, t_end)
+    ax2.set_ylim(-1.2, 1.2)
+    for a, b in straight_windows:
+        ax2.axvspan(a, b, color="tab:green", alpha=0.08, lw=0)
+    ax2.set_title("from 5 s (shaded: straight flight, where |error| <= 0.5 m is required)",
+                  fontsize=9)  # fmt: skip
+    for ax in (ax1, ax2):
+        ax.axhline(0.0, color="k", lw=0.6)
+        for b in (-band, band):
+            ax.axhline(b, color="0.5", lw=0.7, ls=":")
+        ax.set_xlabel("time (s)")
+        ax.set_ylabel(r"$\|y\| - d_m$ (m)")
+        ax.grid(True, lw=0.3)
+    ax1.legend(fontsize=7, loc="upper right")
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    return fig
+
+
+def euler_figure(t, R_des, R, title: str, zoom: tuple[float, float] = (0.0, 10.0)) -> Figure:
+    """Euler angles (ZYX roll, pitch, yaw, degrees) commanded by the position loop (Fig. 19)
+    next to the actual ones (Fig. 20): the whole run on the left, a zoom on the right."""
+    cmd = np.degrees(euler_zyx(R_des))
+    act = np.degrees(euler_zyx(R))
+    names = ("roll", "pitch", "yaw")
+    fig = Figure(figsize=(12.0, 7.0))
+    zm = (t >= zoom[0]) & (t <= zoom[1])
+    for i, name in enumerate(names):
+        for j, sel in enumerate((slice(None), zm)):
+            ax = fig.add_subplot(3, 2, 2 * i + j + 1)
+            ax.plot(t[sel], cmd[sel, i], lw=0.8, color="tab:orange", label="command")
+            ax.plot(t[sel], act[sel, i], lw=0.8, color="tab:blue", label="actual")
+            ax.set_ylabel(f"{name} (deg)")
+            ax.grid(True, lw=0.3)
+            if i == 0:
+                ax.set_title("whole run" if j == 0 else f"{zoom[0]:g}-{zoom[1]:g} s", fontsize=9)
+                ax.legend(fontsize=8, loc="upper right")
+            if i == 2:
+                ax.set_xlabel("time (s)")
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    return fig
