@@ -280,13 +280,13 @@ def _resolve(args: argparse.Namespace, parser):
     # the tables lead with the sweep axes when the scenarios are a plain grid ("| N | ...")
     # (the suite's own axes, and any other axis with several values)
     axes = [k for k, v in grid.items() if k in dict(suite.grid) or len(v) > 1]
-    keys = (tuple((SHORT_NAMES.get(k, k), k) for k in axes)
+    keys = (tuple((SHORT_NAMES.get(k, k), "n_pairs" if k == "pairs" else k) for k in axes)
             if axes and not listed else report.SCENARIO_KEYS)  # fmt: skip
     return suite, preset, specs, scenarios, configs, seeds, reprs, keys
 
 
 def _columns(scenarios, configs) -> list[str]:
-    fixed = ["scenario", "preset", "dynamics", "dim", "n_uavs"]
+    fixed = ["scenario", "preset", "dynamics", "dim", "n_uavs", "n_pairs"]
     extra = []
     for sc in scenarios:
         for k, _ in sc.overrides:
@@ -394,6 +394,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
     results: dict[tuple[int, int], list[dict[str, Any]]] = {}
     traces: dict[tuple[int, int], dict[str, Any]] = {}
     total = len(seeds) * len(specs) * len(scenarios)
+    cpu_s = 0.0  # summed over jobs: a load-independent measure of the work
     with tqdm(total=total, unit="run", desc=f"benchmark {args.suite}", disable=args.quiet,
               dynamic_ncols=True) as bar:  # fmt: skip
         for job, res in run_jobs(jobs, backend=args.backend, workers=args.workers,
@@ -401,6 +402,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
             results.setdefault((job.scenario, job.policy), []).extend(res["rows"])
             if "trace" in res:
                 traces[job.scenario, job.policy] = res["trace"]
+            cpu_s += res["cpu_s"]
             bar.update(len(job.seeds))
     sim_wall = time.perf_counter() - t0
 
@@ -408,7 +410,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
     columns = _columns(scenarios, configs)
     rows = []
     for i, (sc, cfg) in enumerate(zip(scenarios, configs)):
-        d = cfg.to_dict()
+        d = {**cfg.to_dict(), "n_pairs": cfg.n_pairs}
         lead = {"scenario": sc.label, "preset": preset}
         lead.update({k: _cell(d[k]) for k in columns[2:]})
         for j, spec in enumerate(specs):
@@ -469,7 +471,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
         timestamps={"started_utc": started.isoformat(timespec="seconds"),
                     "finished_utc": _now().isoformat(timespec="seconds")},
         timing={"simulation_s": round(sim_wall, 2), "total_s": round(total_s, 2),
-                "jobs": len(jobs), "runs": total},
+                "jobs_cpu_s": round(cpu_s, 2), "jobs": len(jobs), "runs": total},
     ))  # fmt: skip
 
     print(report.summary_table(rows, report.ACCURACY_METRICS, keys))
@@ -477,8 +479,8 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
         print(f"[{'pass' if ok else 'FAIL'}] {c}: {d}")
     print(f"\nwrote {out}/results.csv, results.json, summary.md, run.json, "
           f"{len(fig_paths)} figures{', ' + str(video_path) if video_path else ''} in "
-          f"{total_s:.1f} s (simulation {sim_wall:.1f} s; backend {args.backend}, "
-          f"{args.workers} workers)")  # fmt: skip
+          f"{total_s:.1f} s (simulation {sim_wall:.1f} s wall, {cpu_s:.1f} s CPU in jobs; "
+          f"backend {args.backend}, {args.workers} workers)")  # fmt: skip
     if args.check and not all(ok for _, ok, _ in checks):
         return 1
     return 0

@@ -42,6 +42,7 @@ __all__ = [
 #: short names of config fields in scenario labels and table headers
 SHORT_NAMES = {
     "n_uavs": "N",
+    "pairs": "pairs",
     "obs_noise_position": "noise y (m)",
     "obs_noise_velocity": "noise y' (m/s)",
     "partner_delay": "delay (steps)",
@@ -178,11 +179,21 @@ def _fmt(v: Any) -> str:
     return str(v)
 
 
+def _label_value(key: str, v: Any) -> str:
+    if key == "pairs" and isinstance(v, (list, tuple)):
+        canonical = [[2 * i, 2 * i + 1] for i in range(len(v))]
+        if [list(p) for p in v] == canonical:
+            return str(len(v))  # K pairs (0, 1), (2, 3), ...: the --pairs K shortcut
+    return _fmt(v)
+
+
 def scenario_label(overrides: Mapping[str, Any]) -> str:
-    """``{"n_uavs": 50, "partner_delay": 5}`` -> ``"N=50, partner_delay=5"``."""
+    """``{"n_uavs": 50, "partner_delay": 5}`` -> ``"N=50, partner_delay=5"``; the pairs
+    ``(0, 1), (2, 3)`` are labelled ``pairs=2``."""
     if not overrides:
         return "nominal"
-    return ", ".join(f"{'N' if k == 'n_uavs' else k}={_fmt(v)}" for k, v in overrides.items())
+    return ", ".join(f"{'N' if k == 'n_uavs' else k}={_label_value(k, v)}"
+                     for k, v in overrides.items())  # fmt: skip
 
 
 def expand_scenarios(

@@ -85,8 +85,11 @@ def run_job(job: Job) -> dict[str, Any]:
     Top-level and free of closures so that process pools and Ray can ship it.
     """
     pin_threads()
+    import time
+
     from .rollout import rollout, trace_metrics
 
+    cpu0, wall0 = time.process_time(), time.perf_counter()
     policy = job.spec.build(job.config)
     rec_rows = () if job.record_seed is None else (job.seeds.index(job.record_seed),)
     tr = rollout(job.config, policy, job.seeds, record_rows=rec_rows)
@@ -94,6 +97,9 @@ def run_job(job: Job) -> dict[str, Any]:
         "scenario": job.scenario,
         "policy": job.policy,
         "rows": trace_metrics(tr, **dict(job.metric_kwargs)),
+        # CPU seconds do not grow when other processes share the cores; wall seconds do
+        "cpu_s": time.process_time() - cpu0,
+        "wall_s": time.perf_counter() - wall0,
     }
     if rec_rows:
         r = rec_rows[0]
@@ -118,9 +124,14 @@ def _local(jobs: Sequence[Job], workers: int) -> Iterator[tuple[Job, dict[str, A
         for job in jobs:
             yield job, run_job(job)
         return
+    import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    with ProcessPoolExecutor(max_workers=min(workers, len(jobs))) as pool:
+    # fresh worker processes rather than forks of this one: a fork of a process whose torch /
+    # OpenMP thread pools are running (the driver may have loaded a learned policy) can hang
+    methods = mp.get_all_start_methods()
+    ctx = mp.get_context("forkserver" if "forkserver" in methods else "spawn")
+    with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=ctx) as pool:
         futs = {pool.submit(run_job, job): job for job in jobs}
         try:
             for f in as_completed(futs):

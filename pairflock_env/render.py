@@ -17,6 +17,8 @@ __all__ = ["SwarmRenderer", "draw_swarm", "fit_limits", "triangle_markers", "PAI
 
 PAIR_COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown")
 UNPAIRED_COLOR = "0.35"
+#: velocity arrows (Figs. 5, 9, 12): the 90th-percentile speed is drawn this fraction of the view
+ARROW_FRACTION = 0.08
 
 
 def triangle_markers(xy: np.ndarray, heading: np.ndarray, size: float) -> np.ndarray:
@@ -74,7 +76,7 @@ def draw_swarm(
         leader_q: leader position (dim,) or None.
         headings: previous headings, kept for UAVs at rest.
         size: triangle length in data units (default: 2.5 % of the view).
-        arrows: draw velocity arrows (Figs. 5, 9, 12).
+        arrows: draw velocity arrows (Figs. 5, 9, 12), length proportional to speed.
         limits: (xmin, xmax, ymin, ymax); default fits every UAV and the leader.
     """
     from matplotlib.collections import PolyCollection
@@ -104,9 +106,12 @@ def draw_swarm(
         else:
             for i in (a, b):  # still apart: circle each member
                 ax.add_patch(Circle(xy[i], d_m[k], fill=False, lw=1.2, color=color))
-    if arrows:
+    speed = np.linalg.norm(p[:, :2], axis=1)
+    ref = float(np.percentile(speed, 90)) if n else 0.0
+    if arrows and ref > 0:
+        # arrow length proportional to speed; most arrows at most ARROW_FRACTION of the view
         ax.quiver(xy[:, 0], xy[:, 1], p[:, 0], p[:, 1], color="0.5", width=0.002,
-                  angles="xy", scale_units="xy", scale=0.2)  # fmt: skip
+                  angles="xy", scale_units="xy", scale=ref / (ARROW_FRACTION * span))  # fmt: skip
     if leader_q is not None:
         lq = np.asarray(leader_q, dtype=float)
         ax.plot(lq[0], lq[1], marker="*", ms=14, color="gold", mec="k", mew=0.8, ls="none",

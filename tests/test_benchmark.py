@@ -50,7 +50,7 @@ def test_cli_twice_gives_byte_identical_results(tmp_path):
 
     lines = (a / "results.csv").read_text().splitlines()
     header = lines[0].split(",")
-    assert header[:5] == ["scenario", "preset", "dynamics", "dim", "n_uavs"]
+    assert header[:6] == ["scenario", "preset", "dynamics", "dim", "n_uavs", "n_pairs"]
     assert {"partner_delay", "policy", "seed", "ss_mean_error", "effort", "chattering",
             "final_largest_component", "min_pair_separation"} <= set(header)  # fmt: skip
     assert len(lines) - 1 == 2 * 3 * 2  # scenarios x policies x seeds (one pair)
@@ -132,7 +132,7 @@ def test_three_d_scenario_draws_trajectories(tmp_path):
     assert main([*TINY, "--dim", "3", "--seeds", "1", "-p", "smc", "--workers", "1",
                  "--no-snapshots", "--out", str(out)]) == 0  # fmt: skip
     assert (out / "trajectories3d_nominal_smc.png").stat().st_size > 0
-    assert "3,8," in (out / "results.csv").read_text().splitlines()[1]  # dim, n_uavs
+    assert "3,8,1," in (out / "results.csv").read_text().splitlines()[1]  # dim, N, pairs
 
 
 @pytest.mark.parametrize(
