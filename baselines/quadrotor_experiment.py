@@ -195,7 +195,7 @@ def run_job(
                               rec.velocity_mismatch[b], rec.pair_offset[b])  # fmt: skip
         steps = max(int(tr.ended[b]), 1)
         rows.append({
-            "dynamics": dynamics, "policy": policy, **{"seed": g["seed"]}, **sm,
+            "dynamics": dynamics, "policy": policy, "seed": g["seed"], **sm,
             "pair_accel_limited_frac": 100.0 * rec.limited_steps[b] / steps,
             "pair_motor_saturated_frac": 100.0 * rec.saturated_steps[b] / steps,
             "crashed": int(rec.crashed[b]),
@@ -284,8 +284,8 @@ def check_criteria(rows: Sequence[dict[str, Any]]) -> list[tuple[str, bool, str]
     out.append((f"smc: no two UAVs closer than {c['min_distance']} m",
                 bool(np.all(md >= c["min_distance"])), f"min {np.min(md):.2f} m"))  # fmt: skip
     vm = arr("velocity_mismatch")
-    out.append((f"smc: unpaired velocity within {c['velocity_tolerance']} m/s of the leader "
-                "in [35,50], [60,65] s", bool(np.all(vm <= c["velocity_tolerance"])),
+    out.append(((f"smc: unpaired velocity within {c['velocity_tolerance']} m/s of the leader "
+                 "in [35,50], [60,65] s"), bool(np.all(vm <= c["velocity_tolerance"])),
                 f"max {np.max(vm):.3f} m/s"))  # fmt: skip
     crashed = arr("crashed")
     out.append(("smc: no crash, every episode runs 65 s",
@@ -294,8 +294,8 @@ def check_criteria(rows: Sequence[dict[str, Any]]) -> list[tuple[str, bool, str]
     part = {r["seed"]: r for r in rows if r["dynamics"] == "particle" and r["policy"] == "smc"}
     if part and all(r["seed"] in part for r in smc):
         cost = s - np.array([float(part[r["seed"]]["straight_max_error"]) for r in smc])
-        out.append((f"smc: attitude loop costs <= {c['attitude_cost']} m over the particle "
-                    "(straight-flight max error, same seed)",
+        out.append(((f"smc: attitude loop costs <= {c['attitude_cost']} m over the particle "
+                     "(straight-flight max error, same seed)"),
                     bool(np.all(cost <= c["attitude_cost"])),
                     f"{np.min(cost):+.3f} to {np.max(cost):+.3f} m"))  # fmt: skip
     return out
@@ -447,15 +447,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     table = summarize(rows)
     checks = check_criteria(rows)
     cfg = results[keys[0]]["config"]
-    md = [
-        "# Sec. VI-B: 10 quadrotors, pairwise control",
-        "",
+    intro = (
         f"Preset `{PRESET}` (docs/quadrotor.md), {len(seeds)} seeds ({seeds[0]}-{seeds[-1]}) "
         f"per row, {cfg.episode_steps * cfg.dt:g} s, protocol every {cfg.dt:g} s, physics "
         f"every {cfg.physics_dt:g} s; median [min-max] over seeds. Straight flight = "
         "[15,20], [27,50], [57,65] s; turns = [20,27], [50,57] s; velocity mismatch over "
         "[35,50], [60,65] s. The particle model flies the same scenario, seeds and gains "
-        "without the quadrotor's acceleration limit and tilt cone.",
+        "without the quadrotor's acceleration limit and tilt cone."
+    )
+    md = [
+        "# Sec. VI-B: 10 quadrotors, pairwise control",
+        "",
+        intro,
         "",
         table,
         "",

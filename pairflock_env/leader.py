@@ -8,10 +8,12 @@ New trajectory types register in :data:`LEADERS` and are picked by ``config.lead
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Protocol
 
 import numpy as np
+from numba import njit
 
 from .config import PairFlockConfig
 
@@ -55,6 +57,82 @@ _GL_X = 0.5 * (_GL_X + 1.0)
 _GL_W = 0.5 * _GL_W
 
 
+@njit(cache=True)
+def _heading(t, psi0, turns):
+    """psi(t) = psi0 + sum_k A_k S((t - t_k) / T_k), turns rows (t_k, T_k, A_k [rad])."""
+    psi = psi0
+    for k in range(turns.shape[0]):
+        u = (t - turns[k, 0]) / turns[k, 1]
+        if u >= 1.0:
+            psi += turns[k, 2]
+        elif u > 0.0:
+            psi += turns[k, 2] * 0.5 * (1.0 - math.cos(math.pi * u))
+    return psi
+
+
+@njit(cache=True)
+def _turn_integral(t0, t, speed, psi0, turns, gx, gw):
+    """integral_{t0}^{t} V (cos psi, sin psi) dt by Gauss-Legendre quadrature."""
+    span = t - t0
+    cx = 0.0
+    cy = 0.0
+    for g in range(gx.shape[0]):
+        ps = _heading(t0 + span * gx[g], psi0, turns)
+        cx += gw[g] * math.cos(ps)
+        cy += gw[g] * math.sin(ps)
+    return speed * span * cx, speed * span * cy
+
+
+@njit(cache=True)
+def _climb_turn_state(t, q0, speed, psi0, climb, tc, tl, turns, psi_after, xy_end, gx, gw, q, p):
+    D = q0.shape[0]
+    K = turns.shape[0]
+    for b in range(t.shape[0]):
+        ti = t[b]
+        psi = _heading(ti, psi0, turns)
+        p[b, 0] = speed * math.cos(psi)
+        p[b, 1] = speed * math.sin(psi)
+        # from the end of the last completed turn (or t = 0), straight at its final heading,
+        # then the quadrature of the turn in progress (if any)
+        x = 0.0
+        y = 0.0
+        base_t = 0.0
+        base_psi = psi0
+        current = -1
+        for k in range(K):
+            end = turns[k, 0] + turns[k, 1]
+            if ti >= end:
+                x, y = xy_end[k, 0], xy_end[k, 1]
+                base_t, base_psi = end, psi_after[k]
+            else:
+                if ti > turns[k, 0]:
+                    current = k
+                break
+        straight_to = ti if current < 0 else turns[current, 0]
+        x += speed * (straight_to - base_t) * math.cos(base_psi)
+        y += speed * (straight_to - base_t) * math.sin(base_psi)
+        if current >= 0:
+            dx, dy = _turn_integral(turns[current, 0], ti, speed, psi0, turns, gx, gw)
+            x += dx
+            y += dy
+        q[b, 0] = q0[0] + x
+        q[b, 1] = q0[1] + y
+        if D == 3:
+            # climb at c until tc, fade to 0 along a half-cosine over tl, then level
+            if ti <= tc:
+                z, vz = climb * ti, climb
+            else:
+                tau = min(ti - tc, tl)
+                z = climb * tc
+                vz = 0.0
+                if tl > 0.0:
+                    z += climb * 0.5 * (tau + tl / math.pi * math.sin(math.pi * tau / tl))
+                    if ti < tc + tl:
+                        vz = climb * 0.5 * (1.0 + math.cos(math.pi * tau / tl))
+            q[b, 2] = q0[2] + z
+            p[b, 2] = vz
+
+
 class ClimbAndTurnLeader:
     """Constant ground speed with a climb phase and smooth heading turns (Sec. VI-B).
 
@@ -69,8 +147,9 @@ class ClimbAndTurnLeader:
         q(t)    = q0 + integral_0^t p
 
     The integral is exact (closed form) on straight segments and for z; inside a turn it uses
-    Gauss-Legendre quadrature from the turn's start. Everything is a pure function of t, so
-    swarms at different times are evaluated together. In 2-D there is no climb.
+    24-point Gauss-Legendre quadrature from the turn's start. Everything is a pure function of
+    t (a numba loop over the swarms' times), so swarms at different times are evaluated
+    together. In 2-D there is no climb.
 
     Args:
         position, velocity: q(0) and p(0), each (dim,).
@@ -99,6 +178,8 @@ class ClimbAndTurnLeader:
         self.climb_rate = float(v0[2]) if self.dim == 3 else 0.0
         self.climb_time = np.inf if climb_time is None else float(climb_time)
         self.level_time = float(level_time)
+        if self.level_time < 0:
+            raise ValueError(f"level_time={level_time!r} is invalid: must be >= 0")
         turns = [(float(a), float(b), float(c)) for a, b, c in turns]
         for k, (t0, dur, _) in enumerate(turns):
             if dur <= 0 or t0 < 0 or (k and t0 < turns[k - 1][0] + turns[k - 1][1]):
@@ -109,88 +190,29 @@ class ClimbAndTurnLeader:
         if turns and self.speed == 0:
             raise ValueError(f"velocity={v0.tolist()} is invalid: turns need a horizontal speed")
         self.turns = np.asarray(turns, dtype=np.float64).reshape(-1, 3)
-        # heading after each turn and horizontal position at each turn's end
+        # heading after each turn and horizontal position (from q0) at each turn's end
         self._psi_after = self.psi0 + np.cumsum(self.turns[:, 2])
-        ends = self.turns[:, 0] + self.turns[:, 1]
         self._xy_end = np.zeros((len(turns), 2))
         xy, t_prev, psi_prev = np.zeros(2), 0.0, self.psi0
-        for k in range(len(turns)):
-            t0 = self.turns[k, 0]
+        for k, (t0, dur, _) in enumerate(self.turns):
             xy = xy + self.speed * (t0 - t_prev) * np.array([np.cos(psi_prev), np.sin(psi_prev)])
-            xy = xy + self._turn_integral(k, np.array([ends[k]]))[0]
+            xy = xy + np.array(_turn_integral(t0, t0 + dur, self.speed, self.psi0, self.turns,
+                                              _GL_X, _GL_W))  # fmt: skip
             self._xy_end[k] = xy
-            t_prev, psi_prev = ends[k], self._psi_after[k]
+            t_prev, psi_prev = t0 + dur, self._psi_after[k]
 
     def heading(self, t: np.ndarray) -> np.ndarray:
         """psi(t) in rad, shape of t."""
         t = np.asarray(t, dtype=np.float64)
-        psi = np.full(t.shape, self.psi0)
-        for t0, dur, ang in self.turns:
-            u = np.clip((t - t0) / dur, 0.0, 1.0)
-            psi += ang * 0.5 * (1.0 - np.cos(np.pi * u))
-        return psi
-
-    def _turn_integral(self, k: int, t: np.ndarray) -> np.ndarray:
-        """integral of V (cos psi, sin psi) from turn k's start to t (inside the turn), (n, 2)."""
-        t0 = self.turns[k, 0]
-        span = t - t0
-        nodes = t0 + span[:, None] * _GL_X  # (n, G)
-        psi = self.heading(nodes)
-        c = (np.cos(psi) * _GL_W).sum(axis=1)
-        s = (np.sin(psi) * _GL_W).sum(axis=1)
-        return self.speed * span[:, None] * np.stack([c, s], axis=1)
-
-    def _vertical(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        c, tc, tl = self.climb_rate, self.climb_time, self.level_time
-        tau = np.clip(t - tc, 0.0, tl) if np.isfinite(tc) else np.zeros_like(t)
-        climbing = t <= tc
-        z = np.where(climbing, c * t, c * tc)
-        vz = np.where(climbing, c, 0.0)
-        if tl > 0 and np.isfinite(tc):
-            fading = (t > tc) & (t < tc + tl)
-            vz = np.where(fading, c * 0.5 * (1.0 + np.cos(np.pi * tau / tl)), vz)
-            z = z + np.where(t > tc, c * 0.5 * (tau + tl / np.pi * np.sin(np.pi * tau / tl)), 0.0)
-        return z, vz
+        return np.array([_heading(x, self.psi0, self.turns) for x in t.reshape(-1)]).reshape(t.shape)
 
     def state(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        t = np.asarray(t, dtype=np.float64).reshape(-1)
-        psi = self.heading(t)
-        p = np.zeros((t.shape[0], self.dim))
-        p[:, 0] = self.speed * np.cos(psi)
-        p[:, 1] = self.speed * np.sin(psi)
-        # horizontal position: from the end of the last completed turn (or from t = 0), straight
-        # at that turn's final heading, then the quadrature of the turn in progress (if any)
-        xy = np.zeros((t.shape[0], 2))
-        base_t = np.zeros(t.shape[0])
-        base_psi = np.full(t.shape[0], self.psi0)
-        straight_until = t
-        n_turns = len(self.turns)
-        if n_turns:
-            starts = self.turns[:, 0]
-            ends = starts + self.turns[:, 1]
-            k = np.searchsorted(starts, t, side="right") - 1  # last turn started by t (-1: none)
-            kc = np.maximum(k, 0)
-            in_turn = (k >= 0) & (t < ends[kc])
-            done = np.where(in_turn, k - 1, k)  # last turn completed by t
-            dc = np.maximum(done, 0)
-            has = done >= 0
-            xy = np.where(has[:, None], self._xy_end[dc], 0.0)
-            base_t = np.where(has, ends[dc], 0.0)
-            base_psi = np.where(has, self._psi_after[dc], self.psi0)
-            straight_until = np.where(in_turn, starts[kc], t)
-        xy = xy + self.speed * (straight_until - base_t)[:, None] * np.stack(
-            [np.cos(base_psi), np.sin(base_psi)], axis=1
-        )
-        if n_turns:
-            for kk in np.unique(k[in_turn]):
-                sel = in_turn & (k == kk)
-                xy[sel] += self._turn_integral(int(kk), t[sel])
+        t = np.ascontiguousarray(t, dtype=np.float64).reshape(-1)
         q = np.empty((t.shape[0], self.dim))
-        q[:, :2] = self.q0[:2] + xy
-        if self.dim == 3:
-            z, vz = self._vertical(t)
-            q[:, 2] = self.q0[2] + z
-            p[:, 2] = vz
+        p = np.empty((t.shape[0], self.dim))
+        _climb_turn_state(t, self.q0, self.speed, self.psi0, self.climb_rate, self.climb_time,
+                          self.level_time, self.turns, self._psi_after, self._xy_end, _GL_X,
+                          _GL_W, q, p)  # fmt: skip
         return q, p
 
 

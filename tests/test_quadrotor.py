@@ -165,7 +165,7 @@ def test_acceleration_limit_and_tilt_cone_hold():
 
 
 def test_heading_is_held_during_manoeuvres():
-    cfg, model, q, p = _model(N=2, quad_yaw=30.0)
+    _, model, q, p = _model(N=2, quad_yaw=30.0)
     np.testing.assert_allclose(euler_zyx(model.R)[..., 2], math.radians(30.0))
     rng = np.random.default_rng(0)
     for _ in range(150):  # 3 s of random commands, changed every control period
@@ -179,7 +179,7 @@ def test_heading_is_held_during_manoeuvres():
 
 
 def test_drag_is_compensated():
-    cfg, model, q, p = _model(quad_drag=0.25)
+    _, model, q, p = _model(quad_drag=0.25)
     p[0, 0] = (5.0, 0.0, 0.0)
     a = np.zeros_like(q)
     for _ in range(50):  # 1 s: the attitude settles to balance the drag
@@ -207,7 +207,7 @@ def test_motor_saturation_is_reported_and_thrusts_stay_in_limits():
 
 # --------------------------------------------------------------------------- crashes
 def test_a_flipped_uav_crashes_and_stops():
-    cfg, model, q, p = _model(N=2)
+    _, model, q, p = _model(N=2)
     model.R[0, 1] = rotation_zyx(math.pi, 0.0, 0.0)  # upside down
     model.advance(q, p, np.zeros_like(q))
     assert model.crashed[0].tolist() == [False, True]
@@ -224,7 +224,7 @@ def test_a_flipped_uav_crashes_and_stops():
 
 
 def test_a_non_finite_command_crashes_only_that_uav():
-    cfg, model, q, p = _model(N=3)
+    _, model, q, p = _model(N=3)
     a = np.zeros_like(q)
     a[0, 2, 1] = np.nan
     model.advance(q, p, a)

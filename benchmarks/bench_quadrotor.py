@@ -1,0 +1,196 @@
+"""Speed of the quadrotor env: the paper-quadrotor scenario (10 UAVs, 50 Hz protocol, 500 Hz
+physics) through the public PettingZoo API at B = 1 and through the batched core at B = 64.
+
+    python benchmarks/bench_quadrotor.py            # 7 repeats of >= 0.5 s per figure
+    python benchmarks/bench_quadrotor.py --quick    # 3 repeats of >= 0.2 s
+
+Reports simulated seconds per wall second (B = 1; targets >= 20, i.e. 20 x real time) and
+swarm-seconds per wall second (B swarms x simulated seconds; target >= 300 at B = 64), as
+medians over repeats, and where the time of one control step goes. Everything runs on one
+thread: numba kernels are single-threaded and OMP/MKL/NUMBA threads are pinned to 1 before
+numpy is imported (nothing here imports torch).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import argparse  # noqa: E402
+import platform  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
+from pairflock_env.dynamics.quadrotor import QuadrotorModel  # noqa: E402
+from pairflock_env.flocking import flocking_pass, pair_pass  # noqa: E402
+
+PRESET = "paper-quadrotor"
+TARGET_B1 = 20.0  # simulated s per wall s at B = 1 through PettingZoo
+TARGET_B64 = 300.0  # swarm-s per wall s at B = 64 through the core
+
+
+def _median_rate(fn, work: float, repeats: int, min_time: float) -> float:
+    """Median of ``work / seconds`` over ``repeats`` timed batches of calls to ``fn``."""
+    fn()  # warm up (JIT, caches)
+    n = 1
+    while True:  # calibrate the number of calls per batch
+        t0 = time.perf_counter()
+        for _ in range(n):
+            fn()
+        if time.perf_counter() - t0 >= min_time:
+            break
+        n *= 2
+    rates = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(n):
+            fn()
+        rates.append(work * n / (time.perf_counter() - t0))
+    return statistics.median(rates)
+
+
+def _config(**overrides):
+    # long enough that no episode ends inside a timing loop
+    return make_config(PRESET, max_cycles=10**9, **overrides)
+
+
+def bench_pettingzoo(repeats: int, min_time: float, with_policy: bool) -> float:
+    """Simulated seconds per wall second of ``parallel_env.step`` (optionally with the
+    sliding-mode controller's ``predict`` for both agents in the loop)."""
+    from baselines import make_pair_policy
+
+    env = parallel_env(preset=PRESET, max_cycles=10**9)
+    obs, _ = env.reset(seed=0)
+    dt = env.config.dt
+    state = {"obs": obs}
+    if with_policy:
+        pol = make_pair_policy("smc", env)
+
+        def step():
+            act = {a: pol.predict(o)[0] for a, o in state["obs"].items()}
+            state["obs"] = env.step(act)[0]
+    else:
+        act = {a: np.full(3, 0.05, np.float32) for a in env.agents}
+
+        def step():
+            env.step(act)
+
+    return _median_rate(step, dt, repeats, min_time)
+
+
+def bench_core(B: int, repeats: int, min_time: float, dynamics: str = "quadrotor") -> float:
+    """Swarm-seconds per wall second of ``PairFlockCore.step`` with B swarms."""
+    cfg = _config(dynamics=dynamics)
+    core = PairFlockCore(cfg, num_envs=B)
+    core.reset(seed=0)
+    actions = np.random.default_rng(0).uniform(-0.2, 0.2, (B, core.n_agents, 3))
+    return _median_rate(lambda: core.step(actions), B * cfg.dt, repeats, min_time)
+
+
+def bench_bare_model(B: int, repeats: int, min_time: float) -> float:
+    """Swarm-seconds per wall second of the quadrotor kernel alone under a held command."""
+    cfg = _config()
+    model = QuadrotorModel(cfg, B)
+    q = np.zeros((B, cfg.n_uavs, 3))
+    q[..., 0] = 3.0 * np.arange(cfg.n_uavs)
+    q[..., 2] = 20.0
+    p = np.zeros_like(q)
+    model.reset_rows(np.arange(B), q, p)
+    a = np.random.default_rng(0).uniform(-1.0, 1.0, q.shape)
+    return _median_rate(lambda: model.advance(q, p, a), B * cfg.dt, repeats, min_time)
+
+
+def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
+    """Microseconds per control step in each part of one step (B swarms); at B = 1 also the
+    PettingZoo layer on top of the core."""
+    cfg = _config()
+    core = PairFlockCore(cfg, num_envs=B)
+    core.reset(seed=0)
+    M = core.n_agents
+    actions = np.zeros((B, M, 3))
+    lq, lp = core.leader_state()
+    fl_out, pp_out = {}, {}
+    q, p = core.q.copy(), core.p.copy()
+    a_des = core.flock_accel.copy()
+
+    def us(fn):
+        return 1e6 / _median_rate(fn, 1.0, repeats, min_time)
+
+    def flock():
+        fl_out.update(flocking_pass(core._params, core.q, core.p, lq, lp, core.pinned,
+                                    core.partner_of, out=fl_out or None))  # fmt: skip
+
+    def pairs():
+        pp_out.update(pair_pass(core.q, core.p, core.agent_uavs, core.partner_uavs, cfg.radius,
+                                cfg.obs_neighbors, out=pp_out or None))  # fmt: skip
+
+    parts = {"total core.step": us(lambda: core.step(actions))}
+    if B == 1:
+        env = parallel_env(preset=PRESET, max_cycles=10**9)
+        env.reset(seed=0)
+        act = {ag: np.zeros(3, np.float32) for ag in env.agents}
+        parts["PettingZoo layer (dicts, checks, infos)"] = us(lambda: env.step(act)) - parts[
+            "total core.step"
+        ]
+    parts["quadrotor: 10 substeps of controller + mixer + motors + rigid body (numba)"] = us(
+        lambda: core.vehicle.advance(q, p, a_des)
+    )
+    parts["quadrotor info() (numpy)"] = us(core.vehicle.info)
+    parts["flocking sweep (numba)"] = us(flock)
+    parts["pair/neighbour sweep (numba)"] = us(pairs)
+    parts["climb-and-turn leader state (numpy)"] = us(lambda: core.leader_state())
+    inner = [k for k in parts if k not in ("total core.step",) and not k.startswith("PettingZoo")]
+    parts["rest of core.step: checks, observations, rewards, infos (numpy)"] = parts[
+        "total core.step"
+    ] - sum(parts[k] for k in inner)
+    return parts
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(
+        prog="python benchmarks/bench_quadrotor.py",
+        description=__doc__.split("\n\n")[0] + " Prints medians over repeats.",
+    )
+    ap.add_argument("--quick", action="store_true", help="3 repeats of >= 0.2 s instead of 7 x 0.5 s")
+    ap.add_argument("--batch", type=int, nargs="+", default=[1, 16, 64, 256],
+                    help="numbers of swarms B for the core table")  # fmt: skip
+    args = ap.parse_args(argv)
+    repeats, min_time = (3, 0.2) if args.quick else (7, 0.5)
+    cfg = _config()
+
+    print(f"# pairflock_env quadrotor speed ({platform.processor() or platform.machine()}, "
+          f"{os.cpu_count()} cores visible, 1 thread used)\n")  # fmt: skip
+    print(f"Preset `{PRESET}`: N = {cfg.n_uavs}, protocol every {cfg.dt:g} s, physics every "
+          f"{cfg.physics_dt:g} s ({1 / cfg.physics_dt:.0f} Hz, {cfg.substeps} substeps).\n")  # fmt: skip
+    print("## B = 1 through the PettingZoo API (simulated s per wall s, median)\n")
+    print("| loop | x real time | target |\n|---|---|---|")
+    r_env = bench_pettingzoo(repeats, min_time, with_policy=False)
+    r_pol = bench_pettingzoo(repeats, min_time, with_policy=True)
+    ok = "met" if r_env >= TARGET_B1 else "NOT met"
+    print(f"| `env.step` (fixed actions) | {r_env:.1f} | >= {TARGET_B1:g} ({ok}) |")
+    print(f"| `env.step` + sliding-mode `predict` for both agents | {r_pol:.1f} | - |")
+    print(f"| quadrotor kernel alone (10 UAVs, no env) | {bench_bare_model(1, repeats, min_time):.1f} | - |")
+    print("\n## Batched core `PairFlockCore.step` (swarm-seconds per wall s, median)\n")
+    print("| B | quadrotor | particle (same scenario) |\n|---|---|---|")
+    for B in args.batch:
+        rq = bench_core(B, repeats, min_time)
+        rp = bench_core(B, repeats, min_time, dynamics="particle")
+        mark = f" (target >= {TARGET_B64:g}: {'met' if rq >= TARGET_B64 else 'NOT met'})" if B == 64 else ""
+        print(f"| {B} | {rq:,.0f}{mark} | {rp:,.0f} |")
+    for B in (1, 64):
+        print(f"\n## Where the time goes, B = {B} (microseconds per control step)\n")
+        print("| part | us | share of core.step |\n|---|---|---|")
+        parts = breakdown(B, repeats, min_time)
+        total = parts["total core.step"]
+        for k, v in parts.items():
+            print(f"| {k} | {v:,.1f} | {100 * v / total:.0f} % |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
