@@ -143,7 +143,7 @@ def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
     parts["quadrotor info() (numpy)"] = us(core.vehicle.info)
     parts["flocking sweep (numba)"] = us(flock)
     parts["pair/neighbour sweep (numba)"] = us(pairs)
-    parts["climb-and-turn leader state (numpy)"] = us(lambda: core.leader_state())
+    parts["climb-and-turn leader state (numba)"] = us(lambda: core.leader_state())
     inner = [k for k in parts if k not in ("total core.step",) and not k.startswith("PettingZoo")]
     parts["rest of core.step: checks, observations, rewards, infos (numpy)"] = parts[
         "total core.step"

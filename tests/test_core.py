@@ -98,8 +98,9 @@ def test_initial_state_respects_placement(small_config):
     a, b = cfg.pairs[0]
     # the start box: centre and half-widths may differ per axis (paper-quadrotor: z = 20 m)
     center, corner = cfg.vector("swarm_center"), cfg.vector("pair_corner")
-    np.testing.assert_array_equal(core.q[:, a], center - corner)
-    np.testing.assert_array_equal(core.q[:, b], center + corner)
+    shape = core.q[:, a].shape
+    np.testing.assert_array_equal(core.q[:, a], np.broadcast_to(center - corner, shape))
+    np.testing.assert_array_equal(core.q[:, b], np.broadcast_to(center + corner, shape))
     others = np.setdiff1d(np.arange(cfg.n_uavs), [a, b])
     assert np.all(np.abs(core.q[:, others] - center) <= cfg.vector("swarm_half_width"))
     d = np.linalg.norm(core.q[:, :, None] - core.q[:, None], axis=-1)

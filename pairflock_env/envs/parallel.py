@@ -55,20 +55,35 @@ Per agent, a sum of penalties (see ``pairflock_env.rewards``):
 ``-w_err |pair error| - w_u (||u|| / limit)^2 - w_sep max(0, safe - sep)/safe
 - w_col [sep < collision_distance]``; ``-100`` on the step a swarm diverges.
 
+## Vehicle models
+``dynamics="particle"`` (default): every UAV is a double integrator of the commanded
+acceleration (eq. 1). ``dynamics="quadrotor"`` (3-D; preset ``"paper-quadrotor"``, Sec. VI-B):
+every UAV is a 6-DOF rigid body with four rotors whose geometric SO(3) controller tracks
+the same commanded acceleration (flocking + pair action) at ``dt / substeps`` (500 Hz),
+within an acceleration limit and a tilt cone; observations, actions, rewards, seeds and
+baselines are the same. Airframe parameters (``quad_*``), what the extra infos mean and the
+crash semantics are in ``docs/quadrotor.md``.
+
 ## Starting state
-``init="corners"``: pair members at -/+ ``pair_corner`` on every axis (the paper's
-(-90, -90) and (90, 90)), other UAVs uniform in [-50, 50]^dim, no two closer than
-``min_init_spacing``, everyone at rest. ``reset(options={{"positions": ..., "velocities": ...}})``
+``init="corners"``: pair members at ``swarm_center`` -/+ ``pair_corner`` on every axis (the
+paper's (-90, -90) and (90, 90)), other UAVs uniform in ``swarm_center`` +- ``swarm_half_width``
+([-50, 50]^dim in the paper preset), no two closer than ``min_init_spacing``, everyone at
+rest (quadrotors level, rotors at hover speed). ``reset(options={{"positions": ..., "velocities": ...}})``
 sets the state explicitly.
 
 ## Episode end
 Truncation after ``config.episode_steps`` control steps (50 s in the paper preset; override
 with ``max_cycles`` or ``horizon``). Termination when the state diverges (non-finite or
-beyond ``divergence_limit``; ``infos[agent]["diverged"]``), or on a collision when
-``terminate_on_collision=True``. All agents end together.
+beyond ``divergence_limit``; ``infos[agent]["diverged"]``), on a collision when
+``terminate_on_collision=True``, or when a quadrotor crashes (flipped beyond
+``quad_crash_tilt`` or below ``quad_ground_altitude``; ``infos[agent]["vehicle_terminated"]``).
+All agents end together.
 
 ## Infos (per agent)
-{info_keys}, plus ``reward_<term>`` for each reward term.
+{info_keys}, plus ``reward_<term>`` for each reward term. With ``dynamics="quadrotor"`` also
+``crashed``, ``motor_saturated``, ``accel_limited``, ``tilt`` (deg) of the agent and the swarm
+counts ``vehicle_terminated``, ``crashed_uavs``, ``motor_saturated_uavs``,
+``accel_limited_uavs``.
 
 ## Arguments
 ``preset`` (default ``"paper"``), ``config`` (a ``PairFlockConfig``), ``render_mode``
