@@ -387,3 +387,33 @@ def test_so3_exp_hat_vee_and_euler_angles():
     np.testing.assert_allclose(euler_zyx(rotation_zyx(*ang.T)), ang, atol=1e-12)
     with pytest.raises(ValueError, match="phi"):
         so3_exp(np.zeros(4))
+
+
+# --------------------------------------------------------------------------- experiment CLI
+def test_experiment_cli_writes_table_csv_and_figures(tmp_path):
+    import csv
+
+    from baselines.quadrotor_experiment import main
+
+    out = tmp_path / "q"
+    rc = main(["--seeds", "2", "--horizon", "16", "--policies", "smc", "zero", "--workers", "1",
+               "--out", str(out), "--quiet", "--dpi", "40"])  # fmt: skip
+    assert rc == 0
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert {(r["dynamics"], r["policy"]) for r in rows} == {
+        (d, p) for d in ("quadrotor", "particle") for p in ("smc", "zero")
+    }
+    smc = [r for r in rows if r["dynamics"] == "quadrotor" and r["policy"] == "smc"]
+    zero = [r for r in rows if r["dynamics"] == "quadrotor" and r["policy"] == "zero"]
+    assert all(float(a["straight_max_error"]) < float(b["straight_max_error"])
+               for a, b in zip(smc, zero))  # fmt: skip
+    summary = (out / "summary.md").read_text()
+    assert "| quadrotor | smc |" in summary and "Criteria" in summary
+    for name in ("snapshots", "trajectories_3d", "sliding_surface", "pair_error", "euler_angles"):
+        assert (out / f"{name}.png").stat().st_size > 1000
+    # 4 s cannot show the criteria's windows: --check must fail rather than pass vacuously
+    assert main(["--seeds", "1", "--horizon", "4", "--policies", "smc", "--dynamics",
+                 "quadrotor", "--workers", "1", "--out", str(out / "c"), "--quiet",
+                 "--no-figures", "--check"]) == 1  # fmt: skip
+    with pytest.raises(SystemExit, match="quad_mass"):
+        main(["--set", "quad_mass=-1", "--out", str(out / "bad"), "--quiet"])
