@@ -341,7 +341,7 @@ def _replot(args, parser) -> int:
     traces = load_traces(d / "traces.npz") if (d / "traces.npz").exists() else {}
     paths = make_figures(d, rows, traces, res["scenarios"],
                          [p["label"] for p in res["policies"]],
-                         snapshots=not args.no_snapshots)  # fmt: skip
+                         snapshots=res.get("snapshots", True) and not args.no_snapshots)  # fmt: skip
     print(f"wrote {len(paths)} figures in {d}")
     return 0
 
@@ -382,6 +382,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
     from .sweep import make_jobs, run_jobs
 
     figures = not args.no_figures
+    snapshots = suite.snapshots and not args.no_snapshots
     metric_kwargs = {} if args.steady_window is None else {"steady_window": args.steady_window}
     jobs = make_jobs(
         configs, specs, seeds, batch_size=args.batch_size,
@@ -425,6 +426,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
     atomic_write_text(out / "results.json", report.dumps_stable({
         "suite": args.suite, "preset": preset, "seeds": seeds, "scenarios": sc_records,
         "policies": pol_records, "metrics": {k: list(v) for k, v in METRIC_DOCS.items()},
+        "snapshots": snapshots,
         "runs": report.json_rows(rows),
     }))  # fmt: skip
 
@@ -436,7 +438,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
         report.save_traces(out / "traces.npz", traces)
         fig_paths = report.make_figures(
             out, rows, traces, sc_records, [s.label for s in specs],
-            snapshots=suite.snapshots and not args.no_snapshots,
+            snapshots=snapshots,
         )  # fmt: skip
     video_path = None
     if video is not None:

@@ -42,6 +42,8 @@ POLICY_STYLE = {
     "proportional": dict(color="tab:blue", label="normal method (eq. 44)"),
     "zero": dict(color="0.4", label="no pair term"),
 }
+#: widest figure (inches) before boxes get narrower instead
+MAX_WIDTH_IN = 14.0
 #: colours for every other policy spec, in order of appearance
 _EXTRA_COLORS = ("tab:green", "tab:purple", "tab:orange", "tab:brown", "tab:pink", "tab:olive",
                  "tab:cyan")  # fmt: skip
@@ -73,6 +75,20 @@ def save_figure(fig: Figure, path: str | Path, dpi: int = 110) -> Path:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi, metadata={"Software": None})
     return atomic_write_bytes(Path(path), buf.getvalue())
+
+
+def _suptitle(fig: Figure, title: str) -> None:
+    """Figure title above the panels: tight layout, then lower the panels if their titles
+    would touch it (tight_layout alone lets them overlap in tall figures)."""
+    text = fig.suptitle(title)
+    fig.tight_layout()
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    pad = 0.1 * fig.dpi  # 0.1 in
+    bottom = text.get_window_extent(renderer).y0
+    top = max(ax.get_tightbbox(renderer).y1 for ax in fig.axes)
+    if top > bottom - pad:
+        shift = (top - bottom + pad) / fig.bbox.height
+        fig.subplots_adjust(top=fig.subplotpars.top - shift)
 
 
 def _grid(n: int, ncols: int) -> tuple[int, int]:
@@ -108,8 +124,7 @@ def snapshot_figure(
         )  # fmt: skip
         if positions.shape[-1] == 3:
             ax.set_title(f"t = {round(float(t[k]), 2):g} s (x-y plane)", fontsize=10)
-    fig.suptitle(title)
-    fig.tight_layout()
+    _suptitle(fig, title)
     return fig
 
 
@@ -137,8 +152,7 @@ def surface_panels_figure(
         ax.set_title(ptitle, fontsize=10)
         ax.grid(True, lw=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle(title)
-    fig.tight_layout()
+    _suptitle(fig, title)
     return fig
 
 
@@ -178,8 +192,7 @@ def error_figure(
         ax.set_title(ptitle, fontsize=10)
         ax.grid(True, lw=0.3)
         ax.legend(fontsize=8)
-    fig.suptitle(title)
-    fig.tight_layout()
+    _suptitle(fig, title)
     return fig
 
 
@@ -201,7 +214,8 @@ def steady_error_figure(
     styles = dict(styles or policy_styles(policies))
     P = len(policies)
     width = 0.8 / P
-    fig = Figure(figsize=(max(5.0, 1.1 + 0.45 * P * len(scenarios) + 0.5 * len(scenarios)), 4.2))
+    S = len(scenarios)
+    fig = Figure(figsize=(min(MAX_WIDTH_IN, max(5.0, 1.1 + 0.45 * P * S + 0.5 * S)), 4.6))
     ax = fig.add_subplot(1, 1, 1)
     labels = []
     for i, sc in enumerate(scenarios):

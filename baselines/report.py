@@ -290,14 +290,16 @@ def make_figures(
             out_dir / "sliding_surface.png", dpi=dpi))  # fmt: skip
 
     # steady-state error per scenario and policy, every run a dot
-    vals = {}
-    for r in rows:
-        vals.setdefault((_scenario(r), r["policy"]), []).append(r["ss_mean_error"])
-    unit = METRIC_DOCS["ss_mean_error"][0]
-    paths.append(save_figure(steady_error_figure(
-        vals, labels, list(policies), f"steady mean |error| ({unit})",
-        f"Steady-state pair error ({METRIC_DOCS['ss_mean_error'][1]})", styles=styles),
-        out_dir / "steady_error.png", dpi=dpi))  # fmt: skip
+    for metric, name, ylabel in (("ss_mean_error", "steady_error.png", "steady mean |error|"),
+                                 ("ss_max_error", "steady_max_error.png", "steady max |error|")):  # fmt: skip
+        vals: dict[tuple[str, str], list[float]] = {}
+        for r in rows:
+            vals.setdefault((_scenario(r), r["policy"]), []).append(r[metric])
+        unit, meaning = METRIC_DOCS[metric]
+        paths.append(save_figure(steady_error_figure(
+            vals, labels, list(policies), f"{ylabel} ({unit})",
+            f"Steady-state pair error: {meaning}", styles=styles),
+            out_dir / name, dpi=dpi))  # fmt: skip
 
     # snapshots and 3-D trajectories of the recorded run
     for (i, j), tr in sorted(traces.items()):
