@@ -275,10 +275,10 @@ def check_criteria(rows: Sequence[dict[str, Any]]) -> list[tuple[str, bool, str]
                 f"{np.nanmin(entry):.2f}-{np.nanmax(entry):.2f} s" if np.isfinite(entry).any()
                 else "never"))  # fmt: skip
     s = arr("straight_max_error")
-    out.append((f"smc: |pair error| <= {c['straight_max']} m in [15,20], [27,50], [57,65] s",
+    out.append((f"smc: max abs pair error <= {c['straight_max']} m in [15,20], [27,50], [57,65] s",
                 bool(np.all(s <= c["straight_max"])), f"max {np.max(s):.3f} m"))  # fmt: skip
     tp = arr("turn_peak_error")
-    out.append((f"smc: peak |pair error| in the turns <= {c['turn_peak_max']} m",
+    out.append((f"smc: peak abs pair error in the turns <= {c['turn_peak_max']} m",
                 bool(np.all(tp <= c["turn_peak_max"])), f"max {np.max(tp):.3f} m"))  # fmt: skip
     md = arr("min_distance")
     out.append((f"smc: no two UAVs closer than {c['min_distance']} m",

@@ -34,6 +34,7 @@ _DYNAMICS = ("particle", "quadrotor")
 _INTEGRATORS = ("semi_implicit", "exact")
 _INITS = ("corners", "random")
 _LEADERS = ("constant_velocity", "climb_and_turn")
+_QUAD_MIXERS = ("desaturate", "clip")
 #: vector fields given as one repeated number are re-broadcast when ``replace`` changes dim
 _BROADCAST_VECTORS = ("leader_position", "leader_velocity", "swarm_center")
 
@@ -199,6 +200,10 @@ class PairFlockConfig:
     """Largest thrust of one rotor (N): 4 x 2.79 N = 2.5 x the weight of 0.455 kg, a common
     thrust-to-weight design margin for small multirotors (rotor speed 968 rad/s). Assumed,
     as in docs/quadrotor.md."""
+    quad_mixer: str = "desaturate"
+    """What the mixer does when a rotor would leave its thrust range: ``"desaturate"`` (keep
+    the direction of the body moments and give up collective thrust first, as flight stacks
+    do) or ``"clip"`` (clip each rotor on its own, which distorts the moments)."""
     quad_motor_time_constant: float = 0.03
     """Time constant tau of the first-order rotor-speed response (s); 0 = instantaneous.
     Assumed, in the tens-of-milliseconds range identified for brushless motors of this size
@@ -568,6 +573,7 @@ def _validate_quadrotor(cfg: PairFlockConfig) -> None:
     for name in ("quad_motor_thrust_min", "quad_motor_time_constant", "quad_drag"):
         _set(cfg, name, _as_float(name, getattr(cfg, name), nonneg=True))
     _set(cfg, "quad_yaw", _as_float("quad_yaw", cfg.quad_yaw))
+    _set(cfg, "quad_mixer", _as_choice("quad_mixer", cfg.quad_mixer, _QUAD_MIXERS))
     inertia = _as_vector("quad_inertia", cfg.quad_inertia, 3)
     if min(inertia) <= 0:
         raise _bad("quad_inertia", cfg.quad_inertia, "all three moments must be > 0 (kg m^2)")

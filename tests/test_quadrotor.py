@@ -144,6 +144,13 @@ def test_mixer_inverts_the_rotor_map_and_desaturates_thrust_before_attitude():
     cos = out[2, 1:] @ M[2] / np.linalg.norm(out[2, 1:]) / np.linalg.norm(M[2])
     assert cos == pytest.approx(1.0, abs=1e-12)
     np.testing.assert_allclose(T[3], cfg.quad_motor_thrust_min)
+    # plain clipping (quad_mixer="clip") keeps thrust but bends the moments
+    clip = make_config("paper-quadrotor", quad_mixer="clip")
+    Tc, sat_c = QuadrotorModel(clip, 1).params.mix(f, M)
+    assert sat_c.tolist() == sat.tolist()
+    np.testing.assert_array_equal(Tc[0], T[0])
+    bent = Tc[2] @ A.T
+    assert bent[1:] @ M[2] / np.linalg.norm(bent[1:]) / np.linalg.norm(M[2]) < 0.999
 
 
 def test_acceleration_limit_and_tilt_cone_hold():
@@ -343,6 +350,7 @@ def test_bad_leader_paths_are_rejected(overrides, field):
         (dict(quad_tilt_limit=90.0), ValueError, "quad_tilt_limit"),
         (dict(quad_crash_tilt=30.0), ValueError, "quad_crash_tilt"),
         (dict(quad_ground_altitude="low"), TypeError, "quad_ground_altitude"),
+        (dict(quad_mixer="priority"), ValueError, "quad_mixer"),
         (dict(substeps=2), ValueError, "substeps"),
         (dict(dim=2), ValueError, "dim"),
         (dict(pair_corner=(0.0, 0.0, 0.0)), ValueError, "pair_corner"),

@@ -45,7 +45,8 @@ Per physics step of length h, for each UAV:
    spread max(delta) - min(delta) exceeds T_max - T_min, the moments are scaled down together
    (their direction is kept); then the collective f/4 is shifted by the least amount that
    brings every rotor into range. (Plain per-rotor clipping distorts the moments just when
-   the attitude loop needs them, which lengthens the sliding-mode limit cycle of the pair.)
+   the attitude loop needs them, which lengthens the sliding-mode limit cycle of the pair;
+   ``quad_mixer="clip"`` selects it for comparison.)
 6. Motors: first-order lag on rotor speed towards W_c = sqrt(T_i / k_f), solved exactly
    over the step: W <- W + (W_c - W)(1 - exp(-h / tau)); the rotors then produce
    T_i = k_f W_i^2 and, through A, the moments (Mx, My, Mz) acting on the body.
@@ -80,8 +81,8 @@ ROTOR_SPIN = (1.0, -1.0, 1.0, -1.0)
 
 # indices into the kernel's parameter vector
 (_M, _G, _JX, _JY, _JZ, _D, _KAPPA, _KF, _TMIN, _TMAX, _ALPHA, _KD, _KRX, _KRY, _KRZ,
- _KWX, _KWY, _KWZ, _AMAX, _TANTILT, _FZMIN, _CPSI, _SPSI, _COSCRASH, _GROUND,
- _NPARAM) = range(26)  # fmt: skip
+ _KWX, _KWY, _KWZ, _AMAX, _TANTILT, _FZMIN, _CPSI, _SPSI, _COSCRASH, _GROUND, _DESAT,
+ _NPARAM) = range(27)  # fmt: skip
 
 
 class QuadrotorParams:
@@ -125,6 +126,8 @@ class QuadrotorParams:
         v[_FZMIN] = 0.1 * self.mass * self.g
         v[_CPSI], v[_SPSI] = math.cos(self.yaw), math.sin(self.yaw)
         v[_COSCRASH], v[_GROUND] = math.cos(self.crash_tilt), self.ground
+        self.desaturate = cfg.quad_mixer == "desaturate"
+        v[_DESAT] = float(self.desaturate)
         self.vector = v
 
     def mix(self, f: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -138,7 +141,7 @@ class QuadrotorParams:
         T = np.empty((ff.shape[0], 4))
         sat = np.empty(ff.shape[0], np.bool_)
         _mix_rows(ff, np.ascontiguousarray(M.reshape(-1, 3)), 0.25 / self.d, 0.25 / self.kappa,
-                  self.t_min, self.t_max, T, sat)  # fmt: skip
+                  self.t_min, self.t_max, self.desaturate, T, sat)  # fmt: skip
         return T.reshape(f.shape + (4,)), sat.reshape(f.shape)
 
     def mixer_matrix(self) -> np.ndarray:
@@ -149,7 +152,7 @@ class QuadrotorParams:
 
 
 @njit(cache=True, inline="always")
-def _mix(f, mx, my, mz, inv4d, inv4k, tmin, tmax):
+def _mix(f, mx, my, mz, inv4d, inv4k, tmin, tmax, desaturate):
     """Rotor thrusts (t0, t1, t2, t3, saturated) for collective thrust f and moments M."""
     d0 = inv4d * (mx - my) + inv4k * mz
     d1 = inv4d * (mx + my) - inv4k * mz
@@ -160,6 +163,9 @@ def _mix(f, mx, my, mz, inv4d, inv4k, tmin, tmax):
     lo = min(min(d0, d1), min(d2, d3))
     if base + lo >= tmin and base + hi <= tmax:
         return base + d0, base + d1, base + d2, base + d3, False
+    if not desaturate:
+        return (min(max(base + d0, tmin), tmax), min(max(base + d1, tmin), tmax),
+                min(max(base + d2, tmin), tmax), min(max(base + d3, tmin), tmax), True)  # fmt: skip
     span = hi - lo
     if span > tmax - tmin:  # not even the moments fit: scale them, keep their direction
         sc = (tmax - tmin) / span
@@ -175,9 +181,10 @@ def _mix(f, mx, my, mz, inv4d, inv4k, tmin, tmax):
 
 
 @njit(cache=True)
-def _mix_rows(f, M, inv4d, inv4k, tmin, tmax, T, sat):
+def _mix_rows(f, M, inv4d, inv4k, tmin, tmax, desaturate, T, sat):
     for i in range(f.shape[0]):
-        t0, t1, t2, t3, s = _mix(f[i], M[i, 0], M[i, 1], M[i, 2], inv4d, inv4k, tmin, tmax)
+        t0, t1, t2, t3, s = _mix(f[i], M[i, 0], M[i, 1], M[i, 2], inv4d, inv4k, tmin, tmax,
+                                 desaturate)  # fmt: skip
         T[i, 0], T[i, 1], T[i, 2], T[i, 3] = t0, t1, t2, t3
         sat[i] = s
 
@@ -194,6 +201,7 @@ def _quadrotor_kernel(q, p, a_des, R, w, rotor, crashed, R_des, saturated, limit
     kwx, kwy, kwz = prm[_KWX], prm[_KWY], prm[_KWZ]
     amax, tant, fzmin = prm[_AMAX], prm[_TANTILT], prm[_FZMIN]
     cpsi, spsi, coscrash, ground = prm[_CPSI], prm[_SPSI], prm[_COSCRASH], prm[_GROUND]
+    desaturate = prm[_DESAT] != 0.0
     inv4d = 0.25 / d
     inv4k = 0.25 / kappa
     inv_m = 1.0 / m
@@ -275,7 +283,7 @@ def _quadrotor_kernel(q, p, a_des, R, w, rotor, crashed, R_des, saturated, limit
                 my = -kry * ery - kwy * wy + gy
                 mz = -krz * erz - kwz * wz + gz
                 # 5. mixer with desaturation
-                t0, t1, t2, t3, sat = _mix(f, mx, my, mz, inv4d, inv4k, tmin, tmax)
+                t0, t1, t2, t3, sat = _mix(f, mx, my, mz, inv4d, inv4k, tmin, tmax, desaturate)
                 if sat:
                     saturated[b, n] = True
                 # 6. motors: exact first-order lag on rotor speed, then the rotor forces
