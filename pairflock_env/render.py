@@ -17,6 +17,8 @@ __all__ = ["SwarmRenderer", "draw_swarm", "fit_limits", "triangle_markers", "PAI
 
 PAIR_COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown")
 UNPAIRED_COLOR = "0.35"
+#: fixed margins of an rgb_array frame (pixels)
+FRAME_MARGIN_PX = {"left": 70, "right": 20, "bottom": 55, "top": 50}
 #: velocity arrows (Figs. 5, 9, 12): the 90th-percentile speed is drawn this fraction of the view
 ARROW_FRACTION = 0.08
 
@@ -137,35 +139,44 @@ class SwarmRenderer:
         self.size_px = size_px
         self._headings: np.ndarray | None = None
         self._fig = None
+        self._canvas = None
+        self._ax = None
         self._window = None
 
     def reset(self) -> None:
         self._headings = None
 
-    def _figure(self):
+    def _axes(self):
+        """The frame's axes, created once: a fresh figure and a tight layout per frame cost
+        more than drawing the swarm, so frames reuse one axes with fixed margins."""
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
         if self._fig is None:
             dpi = 100
             self._fig = Figure(figsize=(self.size_px[0] / dpi, self.size_px[1] / dpi), dpi=dpi)
-        self._fig.clear()
-        return self._fig
+            self._canvas = FigureCanvasAgg(self._fig)
+            w, h = self.size_px
+            # margins in pixels: tick labels + axis label left/bottom, a two-line title on top
+            self._fig.subplots_adjust(left=FRAME_MARGIN_PX["left"] / w,
+                                      right=1 - FRAME_MARGIN_PX["right"] / w,
+                                      bottom=FRAME_MARGIN_PX["bottom"] / h,
+                                      top=1 - FRAME_MARGIN_PX["top"] / h)  # fmt: skip
+            self._ax = self._fig.add_subplot(1, 1, 1)
+        else:
+            self._ax.clear()
+        return self._ax
 
     def rgb_array(self, q, p, leader_q, title: str | None = None, *, limits=None) -> np.ndarray:
         """One frame (H, W, 3) uint8 of swarm state q, p (N, dim); ``limits`` as in
         :func:`draw_swarm` (default: fit this frame)."""
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-        fig = self._figure()
-        canvas = FigureCanvasAgg(fig)
-        ax = fig.add_subplot(1, 1, 1)
+        ax = self._axes()
         self._headings = draw_swarm(
             ax, q, p, self.pairs, self.d_m, leader_q, headings=self._headings, title=title,
             limits=limits,
         )
-        fig.tight_layout()
-        canvas.draw()
-        return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+        self._canvas.draw()
+        return np.asarray(self._canvas.buffer_rgba())[..., :3].copy()
 
     def human(self, q, p, leader_q, title: str | None = None, *, limits=None) -> None:
         import matplotlib
@@ -199,4 +210,4 @@ class SwarmRenderer:
 
             plt.close(self._window)
         self._window = None
-        self._fig = None
+        self._fig = self._canvas = self._ax = None
