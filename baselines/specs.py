@@ -240,5 +240,6 @@ def slug(text: str) -> str:
     """File-name-safe form of a label: ``"N=50"`` -> ``"n50"``, ``"smc:k=200"`` -> ``"smc-k200"``.
     """
     s = re.sub(r"[=\s]+", "", text.lower())
-    s = re.sub(r"[^a-z0-9.]+", "-", s).strip("-.")
+    s = re.sub(r"(?<!\d)\.|\.(?!\d)", "-", s)  # keep only decimal points
+    s = re.sub(r"[^a-z0-9.]+", "-", s).strip("-")
     return s or "x"

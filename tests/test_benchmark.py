@@ -205,6 +205,7 @@ def test_scenario_specs_and_grid():
     assert [s.label for s in sc] == ["a, dt=0.01", "a, dt=0.005", "dt=0.01", "dt=0.005"]
     assert sc[1].override_dict == {"n_uavs": 50, "partner_delay": 2, "dt": 0.005, "dim": 2}
     assert slug("N=50") == "n50" and slug("smc:k=200") == "smc-k200"
+    assert slug("noise y 0.3 m") == "noisey0.3m" and slug("sb3:runs/a/m.zip") == "sb3-runs-a-m-zip"
 
 
 def test_replot_redraws_from_files(figure_run):
