@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from baselines import make_pair_policy
+from baselines.quadrotor_invariants import hover_drift, orthonormality_over_scenario, step_response
 from pairflock_env import PairFlockCore, make_config, parallel_env
 from pairflock_env.dynamics.quadrotor import QuadrotorModel
 from pairflock_env.leader import ClimbAndTurnLeader, make_leader
@@ -41,49 +41,25 @@ def _model(B=1, N=2, **overrides):
 
 # --------------------------------------------------------------------------- physics
 def test_hover_with_the_exact_thrust_does_not_drift():
-    cfg, model, q, p = _model(B=2, N=3)
-    q0, w0 = q.copy(), model.rotor_speed.copy()
-    a = np.zeros_like(q)
-    for _ in range(int(round(10.0 / cfg.dt))):  # 10 s, 5000 physics steps
-        model.advance(q, p, a)
-    assert np.abs(q - q0).max() < 1e-6
-    assert np.abs(p).max() < 1e-6
-    assert orthonormality_error(model.R).max() < 1e-12
-    np.testing.assert_allclose(model.rotor_speed, w0, rtol=1e-12)
+    h = hover_drift(seconds=10.0)  # 5000 physics steps, float64
+    assert h["position_drift_m"] < 1e-6
+    assert h["velocity_drift_mps"] < 1e-6
+    assert h["orthonormality_error"] < 1e-12
+    assert h["rotor_speed_change"] < 1e-9 and not h["motor_saturated"]
+    cfg, model, _, _ = _model(B=2, N=3)
     np.testing.assert_allclose(model.motor_thrust, cfg.quad_mass * G / 4, rtol=1e-12)
     info = model.info()
     assert not info["vehicle_terminated"].any() and not info["motor_saturated"].any()
 
 
-def _step_response(direction, **overrides):
-    """Horizontal acceleration (per 500 Hz physics step) after a 2 m/s^2 command step."""
-    cfg, model, q, p = _model(dt=0.002, substeps=1, **overrides)  # sample every physics step
-    a = np.zeros_like(q)
-    a[0, 0, :2] = 2.0 * np.asarray(direction) / np.linalg.norm(direction)
-    n = int(round(2.0 / cfg.dt))
-    acc = np.empty(n)
-    saturated = False
-    for k in range(n):
-        v0 = p[0, 0, :2].copy()
-        model.advance(q, p, a)
-        acc[k] = (p[0, 0, :2] - v0) @ a[0, 0, :2] / 2.0 / cfg.dt  # along the command
-        saturated |= bool(model.motor_saturated.any())
-    t = cfg.dt * np.arange(1, n + 1)
-    return t, acc, saturated
-
-
 @pytest.mark.parametrize("direction", [(1.0, 0.0), (0.0, 1.0), (1.0, -1.0)])
 def test_acceleration_step_meets_the_tracking_criteria(direction):
-    t, acc, saturated = _step_response(direction)
-    ratio = acc / 2.0
-    t90 = t[np.argmax(ratio >= 0.9)]
-    outside = np.flatnonzero(np.abs(ratio - 1.0) > 0.1)
-    settle = t[outside[-1] + 1] if outside.size else t[0]
-    overshoot = max(0.0, ratio.max() - 1.0)
-    assert ratio.max() >= 0.9 and t90 <= 0.4, t90
-    assert settle < 1.0, settle
-    assert overshoot <= 0.35, overshoot
-    assert not saturated
+    s = step_response(direction, size=2.0)
+    assert s["t90_s"] <= 0.4, s["t90_s"]
+    assert s["settle_10pct_s"] < 1.0, s["settle_10pct_s"]
+    assert s["overshoot"] <= 0.35, s["overshoot"]
+    assert not s["motor_saturated"]
+    assert s["ratio"][-1] == pytest.approx(1.0, abs=1e-3)  # and it does track the command
 
 
 def test_with_ideal_motors_the_attitude_loop_is_the_designed_second_order_system():
@@ -271,21 +247,10 @@ def test_core_reports_the_vehicle_diagnostics_per_agent_and_per_swarm():
 
 # --------------------------------------------------------------------------- paper scenario
 def test_rotation_stays_orthonormal_over_the_65_s_scenario():
-    cfg = make_config("paper-quadrotor")
-    core = PairFlockCore(cfg, num_envs=1, seed=0)
-    res = core.reset()
-    policy = make_pair_policy("smc", cfg)
-    model = core.vehicle
-    worst, max_tilt = 0.0, 0.0
-    for _ in range(cfg.episode_steps):
-        act, _ = policy.predict(res.obs.reshape(core.n_agents, -1))
-        res = core.step(act.reshape(1, core.n_agents, 3))
-        worst = max(worst, float(orthonormality_error(model.R).max()))
-        max_tilt = max(max_tilt, float(model.tilt().max()))
-    assert core.t[0] == pytest.approx(65.0)
-    assert worst < 1e-9, worst
-    assert max_tilt > 20.0  # the attitude did move a lot
-    assert not res.terminated.any()
+    o = orthonormality_over_scenario(seed=0)
+    assert o["sim_time_s"] == pytest.approx(65.0) and not o["terminated"]
+    assert o["max_orthonormality_error"] < 1e-9, o
+    assert o["max_tilt_deg"] > 20.0  # the attitude did move a lot
 
 
 # --------------------------------------------------------------------------- leader
