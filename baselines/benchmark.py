@@ -339,9 +339,9 @@ def _replot(args, parser) -> int:
         parser.error(f"--replot {str(d)!r} is invalid: no results.json there")
     rows = [{k: (float("nan") if v is None else v) for k, v in r.items()} for r in res["runs"]]
     traces = load_traces(d / "traces.npz") if (d / "traces.npz").exists() else {}
+    snapshots = bool(res["snapshots"]) and not args.no_snapshots
     paths = make_figures(d, rows, traces, res["scenarios"],
-                         [p["label"] for p in res["policies"]],
-                         snapshots=res.get("snapshots", True) and not args.no_snapshots)  # fmt: skip
+                         [p["label"] for p in res["policies"]], snapshots=snapshots)
     print(f"wrote {len(paths)} figures in {d}")
     return 0
 

@@ -66,7 +66,9 @@ def format_value(v: Any) -> Any:
     return v
 
 
-def write_csv(path: Path, rows: Sequence[Mapping[str, Any]], columns: Iterable[str] | None = None) -> Path:
+def write_csv(
+    path: Path, rows: Sequence[Mapping[str, Any]], columns: Iterable[str] | None = None
+) -> Path:
     columns = list(columns) if columns is not None else list(rows[0]) if rows else []
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n")

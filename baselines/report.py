@@ -290,8 +290,9 @@ def make_figures(
             out_dir / "sliding_surface.png", dpi=dpi))  # fmt: skip
 
     # steady-state error per scenario and policy, every run a dot
-    for metric, name, ylabel in (("ss_mean_error", "steady_error.png", "steady mean |error|"),
-                                 ("ss_max_error", "steady_max_error.png", "steady max |error|")):  # fmt: skip
+    boxes = (("ss_mean_error", "steady_error.png", "steady mean |error|"),
+             ("ss_max_error", "steady_max_error.png", "steady max |error|"))
+    for metric, name, ylabel in boxes:
         vals: dict[tuple[str, str], list[float]] = {}
         for r in rows:
             vals.setdefault((_scenario(r), r["policy"]), []).append(r[metric])

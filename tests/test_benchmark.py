@@ -72,7 +72,7 @@ def figure_run(tmp_path_factory) -> Path:
 def test_figures_video_and_same_initial_states(figure_run):
     figs = sorted(p.name for p in figure_run.glob("*.png"))
     assert figs == ["pair_error.png", "sliding_surface.png", "snapshots_nominal_proportional.png",
-                    "snapshots_nominal_smc.png", "steady_error.png", "steady_max_error.png"]  # fmt: skip
+                    "snapshots_nominal_smc.png", "steady_error.png", "steady_max_error.png"]
     import imageio.v3 as iio
 
     frames = iio.imread(figure_run / "ep.gif")
