@@ -5,7 +5,8 @@
     >>> action, _ = policy.predict(obs["uav_0"])        # SB3's predict signature
 
 Names: ``"smc"`` (sliding mode, eq. 28), ``"proportional"`` (eq. 44), ``"zero"`` (flocking
-only). Gains are keyword arguments (``make_pair_policy("smc", env, k=200)``).
+only), ``"sb3:<path>"`` (a model trained with ``python -m train``). Gains are keyword
+arguments (``make_pair_policy("smc", env, k=200)``).
 """
 
 from __future__ import annotations
@@ -27,11 +28,20 @@ __all__ = [
     "resolve_env",
 ]
 
+
+def _sb3_policy(path: str, env: Any, **gains: Any) -> Any:
+    """``"sb3:<path>"``: a model saved by ``python -m train`` (imports SB3/torch lazily)."""
+    from .sb3_policy import load_sb3_policy
+
+    return load_sb3_policy(path, env, **gains)
+
+
 #: name -> factory(env, **gains); a prefix entry "name:" takes the text after the colon
 POLICIES: dict[str, Callable[..., Any]] = {
     "smc": SlidingModeController,
     "proportional": ProportionalController,
     "zero": ZeroPolicy,
+    "sb3:": _sb3_policy,
 }
 
 

@@ -123,9 +123,16 @@ def rollout(
     limit = config.pair_accel_limit
     report_every = max(1, T // 50)
     last_report = 0
+    # SB3's predict protocol: a policy with memory (a recurrent net, or a learned policy that
+    # holds its action over several control steps) gets its state back and the episode starts
+    state = None
+    episode_start = np.ones(B * M, dtype=bool)
     for k in range(1, T + 1):
         obs = res.obs.reshape(B * M, -1)
-        actions, _ = policy.predict(obs, deterministic=True)
+        actions, state = policy.predict(
+            obs, state=state, episode_start=episode_start, deterministic=True
+        )
+        episode_start = np.zeros(B * M, dtype=bool)
         actions = np.asarray(actions, dtype=np.float64).reshape(B, M, D)
         res = core.step(actions)
         live = ~done

@@ -4,24 +4,53 @@
     >>> env = parallel_env(preset="paper", n_uavs=20)
 
 The batched engine is :class:`PairFlockCore`; the PettingZoo views are ``parallel_env``
-(ParallelEnv), ``env`` / ``raw_env`` (AEC).
+(ParallelEnv), ``env`` / ``raw_env`` (AEC). Importing the package registers the Gymnasium env
+``"pairflock/PairFlock-v0"`` (``gymnasium.make``; ``gymnasium.make_vec`` runs B swarms in one
+core through its ``vector_entry_point``); the SB3 VecEnv is
+``pairflock_env.envs.PairFlockVecEnv`` (imported on first use).
 """
 
 from .config import PRESETS, PairFlockConfig, make_config, preset_names
 from .core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore, StepResult
-from .envs import PairFlockParallelEnv, agent_name, env, parallel_env, raw_env
+from .envs import (
+    ENV_ID,
+    PairFlockGymEnv,
+    PairFlockParallelEnv,
+    PairFlockVectorEnv,
+    agent_name,
+    env,
+    parallel_env,
+    raw_env,
+)
 from .observations import ObsField, ObsLayout
 
 __version__ = "0.1.0"
 
+
+def _register_gymnasium() -> None:
+    import gymnasium
+
+    if ENV_ID not in gymnasium.registry:
+        gymnasium.register(
+            id=ENV_ID,
+            entry_point="pairflock_env.envs.single:PairFlockGymEnv",
+            vector_entry_point="pairflock_env.envs.vector:PairFlockVectorEnv",
+        )
+
+
+_register_gymnasium()
+
 __all__ = [
     "AGENT_INFO_KEYS",
+    "ENV_ID",
     "ObsField",
     "ObsLayout",
     "PRESETS",
     "PairFlockConfig",
     "PairFlockCore",
+    "PairFlockGymEnv",
     "PairFlockParallelEnv",
+    "PairFlockVectorEnv",
     "SWARM_INFO_KEYS",
     "StepResult",
     "__version__",

@@ -1,0 +1,146 @@
+"""A trained stable-baselines3 model in the pair action slot: ``make_pair_policy("sb3:<path>", env)``.
+
+The model was trained on the observation/action of a learning interface
+(:mod:`pairflock_env.learning`, stored in the model file by ``python -m train``); the adapter
+applies the same interface, so it takes the env's standard (physical, world-frame)
+observation and returns the env's standard action, like the analytic controllers::
+
+    policy = make_pair_policy("sb3:runs/ppo/final_model.zip", env)
+    action, _ = policy.predict(obs["uav_0"])
+
+Imports stable-baselines3 and torch; only loaded when an ``sb3:`` policy is requested.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .policies import resolve_env
+
+__all__ = ["SB3PairPolicy", "ALGORITHMS", "METADATA_KEY", "load_sb3_policy", "read_metadata"]
+
+#: attribute of a saved SB3 model holding the pairflock metadata (algorithm, interface, config)
+METADATA_KEY = "pairflock"
+ALGORITHMS = ("PPO", "SAC", "TD3")
+
+
+def _algo_class(name: str):
+    import stable_baselines3 as sb3
+
+    if name not in ALGORITHMS:
+        raise ValueError(f"algorithm {name!r} is invalid: must be one of {', '.join(ALGORITHMS)}")
+    return getattr(sb3, name)
+
+
+def read_metadata(path: str | Path) -> dict[str, Any]:
+    """The pairflock metadata stored in a model zip (without building the model)."""
+    from stable_baselines3.common.save_util import load_from_zip_file
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"model file {str(path)!r} does not exist")
+    data, _, _ = load_from_zip_file(path, device="cpu", load_data=True)
+    meta = (data or {}).get(METADATA_KEY)
+    if not isinstance(meta, dict) or "algo" not in meta or "interface" not in meta:
+        raise ValueError(
+            f"{str(path)!r} is not a pairflock model: it has no {METADATA_KEY!r} metadata "
+            "(train it with `python -m train`)"
+        )
+    return meta
+
+
+class SB3PairPolicy:
+    """SB3 model + learning interface, with the analytic controllers' ``predict`` signature.
+
+    ``predict(observation, state=None, episode_start=None, deterministic=True)`` takes the
+    env's observation ``(obs_size,)`` or ``(n, obs_size)`` and returns env actions ``(dim,)``
+    or ``(n, dim)`` in units of the env's ``pair_accel_limit``, plus a state.
+
+    The policy decides every ``interface.decision_period`` control steps, as in training: the
+    returned state holds each row's last network output and its age, and passing it back
+    (with ``episode_start`` True where an episode begins, as SB3 does for recurrent policies
+    and ``baselines.rollout`` does) makes the next calls reuse that output, decoded against
+    the fresh observation. Without a state (``state=None``) the network decides on every call.
+    """
+
+    def __init__(self, model: Any, env: Any, interface: dict[str, Any]) -> None:
+        from pairflock_env.learning import interface_from_dict
+
+        self.config, self.layout = resolve_env(env)
+        self.model = model
+        self.interface = interface_from_dict(interface, self.config)
+        expected = self.interface.observation_size
+        got = model.observation_space.shape
+        if got != (expected,):
+            raise ValueError(
+                f"the model observes shape {got} but the {self.interface.name!r} interface for "
+                f"this env gives ({expected},); evaluate on an env with the same dim and "
+                f"obs_neighbors as in training"
+            )
+
+    @classmethod
+    def load(cls, path: str | Path, env: Any) -> SB3PairPolicy:
+        meta = read_metadata(path)
+        algo = _algo_class(meta["algo"])
+        model = algo.load(str(path), device="cpu")
+        return cls(model, env, meta["interface"])
+
+    def predict(
+        self,
+        observation: np.ndarray,
+        state: Any = None,
+        episode_start: np.ndarray | None = None,
+        deterministic: bool = True,
+    ) -> tuple[np.ndarray, Any]:
+        obs = np.asarray(observation, dtype=np.float64)
+        if obs.ndim not in (1, 2) or obs.shape[-1] != self.layout.size:
+            raise ValueError(
+                f"observation has shape {obs.shape}; expected ({self.layout.size},) or "
+                f"(n, {self.layout.size})"
+            )
+        batch = obs.reshape(-1, self.layout.size)
+        n = batch.shape[0]
+        k = self.interface.decision_period
+        held = age = None
+        if state is not None:
+            ok = isinstance(state, tuple) and len(state) == 2
+            if not ok or np.shape(state[0]) != (n, self.config.dim):
+                raise ValueError(
+                    "state must be the state returned by the previous predict() call on a batch "
+                    f"of the same size ({n} rows), or None"
+                )
+            held, age = np.array(state[0], dtype=np.float64), np.array(state[1], dtype=np.int64)
+        decide = np.ones(n, bool) if held is None else (age % k == 0)
+        if episode_start is not None and held is not None:
+            starts = np.asarray(episode_start, dtype=bool).reshape(-1)
+            if starts.shape != (n,):
+                raise ValueError(
+                    f"episode_start has shape {np.shape(episode_start)}; expected ({n},)"
+                )
+            decide |= starts
+            age[starts] = 0
+        if held is None:
+            held, age = np.zeros((n, self.config.dim)), np.zeros(n, np.int64)
+        if decide.any():
+            enc = self.interface.encode(batch[decide])
+            a, _ = self.model.predict(enc, deterministic=deterministic)
+            held[decide] = np.asarray(a, dtype=np.float64).reshape(-1, self.config.dim)
+            age[decide] = 0
+        env_a = self.interface.decode(batch, held)
+        new_state = (held, age + 1)
+        return env_a.reshape(obs.shape[:-1] + (self.config.dim,)).astype(np.float32), new_state
+
+    def __repr__(self) -> str:
+        return f"SB3PairPolicy({type(self.model).__name__}, interface={self.interface.name!r})"
+
+
+def load_sb3_policy(path: str, env: Any, **gains: Any) -> SB3PairPolicy:
+    """Factory behind the ``"sb3:"`` prefix of :func:`baselines.make_pair_policy`."""
+    if gains:
+        raise ValueError(f"an sb3 policy takes no gains, got {sorted(gains)}")
+    if not path:
+        raise ValueError("name 'sb3:' needs a model path, e.g. 'sb3:runs/ppo/final_model.zip'")
+    return SB3PairPolicy.load(path, env)

@@ -1,0 +1,172 @@
+"""Gymnasium view of one swarm: one agent choosing the joint action of every paired UAV."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from ..config import PairFlockConfig
+from ._learning_view import (
+    RENDER_MODES,
+    SwarmFrames,
+    build_core_and_interface,
+    check_policy_actions,
+    held_step,
+)
+
+__all__ = ["PairFlockGymEnv", "ENV_ID"]
+
+ENV_ID = "pairflock/PairFlock-v0"
+
+
+class PairFlockGymEnv(gym.Env):
+    """One UAV swarm flocking with the protocol of eqs. 11-19; the agent controls the pair.
+
+    ``gymnasium.make("pairflock/PairFlock-v0", n_uavs=20, pair_accel_limit=50.0)``. Every UAV
+    flies the analytic flocking protocol; the agent sets the pairwise acceleration of the
+    paired UAVs (for the default config: one pair, UAVs 0 and 1), the slot the paper's
+    sliding-mode controller fills. ``gymnasium.make_vec(ENV_ID, num_envs=B,
+    vectorization_mode="vector_entry_point")`` runs B swarms in one batched core
+    (:class:`~pairflock_env.envs.vector.PairFlockVectorEnv`); the SB3 VecEnv with one row per
+    paired UAV is :class:`~pairflock_env.envs.sb3.PairFlockVecEnv`.
+
+    ## Action space
+    ``Box(-1, 1, (M * dim,), float32)``, M = 2 x pairs: the concatenated actions of the paired
+    UAVs A0, B0, A1, B1, ... (``action.reshape(M, dim)`` gives one row per UAV; flat so that
+    SB3's MLP policies take it as is). What a row means depends on ``frame`` (see
+    :mod:`pairflock_env.learning`):
+
+    * ``frame="pair"`` (default): the UAV's acceleration in its pair frame (radial toward the
+      partner, tangential), ``accel_scale`` m/s^2 per unit, on top of a feed-forward that
+      cancels the observed flocking difference on the pair; the sum never exceeds
+      ``pair_accel_limit`` per component.
+    * ``frame="world"``: the raw env action, world frame, units of ``pair_accel_limit``
+      (clipped per component by the core).
+
+    NaN/inf, a wrong shape or a non-numeric dtype raise and leave the env unchanged. One
+    ``step`` is one policy decision: the action is held for the interface's
+    ``decision_period`` control steps (5 x 0.01 s for ``"pair"``, 1 for ``"world"``; set it
+    with ``frame_params={"decision_period": k}``) and the reward is their mean.
+
+    ## Observation space
+    ``Box(-b, b, (M * n,), float32)``: ``obs.reshape(M, n)[m]`` is what UAV m sees.
+    ``frame="pair"``: b = 5 and the normalised pair-frame features of :class:`~pairflock_env.learning.PairFrameInterface`
+    (``env.unwrapped.interface.fields``); ``frame="world"``: the physical observation of
+    :class:`~pairflock_env.observations.ObsLayout` (``env.unwrapped.layout``), b = inf. The
+    physical observation (M, obs_size) is always available as ``env.unwrapped.physical_obs``.
+
+    ## Rewards
+    The mean over the M paired UAVs of the interface's per-UAV reward: the core's penalty sum
+    (``frame="world"``) or the pair frame's log-accuracy / effort / separation reward.
+
+    ## Starting state, episode end
+    As the PettingZoo env (``pairflock_env.parallel_env``): pair members in opposite corners,
+    the others uniform in [-50, 50]^dim at rest; truncation after ``config.episode_steps``
+    control steps (50 s in the paper preset; ``max_cycles`` / ``horizon`` override it);
+    termination on divergence (or on a collision with ``terminate_on_collision=True``).
+    ``step`` after the end raises; call ``reset``.
+
+    ## Infos
+    Per-agent quantities (``pair_error``, ``min_separation``, ...) as arrays (M,), swarm
+    quantities (``sim_time``, ``collisions``, ...) as floats, plus ``reward_<term>``.
+
+    ## Arguments
+    ``preset`` (default ``"paper"``), ``config`` (a ``PairFlockConfig``), ``frame``
+    (``"pair"`` or ``"world"``), ``frame_params`` (dict of
+    :class:`~pairflock_env.learning.PairFrameParams` fields), ``render_mode``
+    (``"rgb_array"`` / ``"human"``), ``seed`` (of the swarm generator when ``reset`` gets
+    none) and any ``PairFlockConfig`` field as a keyword.
+
+    ## Example
+    >>> import gymnasium as gym, pairflock_env
+    >>> env = gym.make("pairflock/PairFlock-v0", n_uavs=20, pair_accel_limit=50.0)
+    >>> obs, info = env.reset(seed=0)
+    >>> obs.shape, env.action_space.shape
+    ((104,), (4,))
+    >>> obs, r, terminated, truncated, info = env.step(env.action_space.sample())
+    >>> round(info["sim_time"], 2)
+    0.01
+
+    ## Version history
+    * v0: initial release.
+    """
+
+    metadata = {"render_modes": list(RENDER_MODES), "render_fps": 25}
+
+    def __init__(
+        self,
+        preset: str | None = "paper",
+        *,
+        config: PairFlockConfig | None = None,
+        frame: str = "pair",
+        frame_params: Mapping[str, Any] | None = None,
+        render_mode: str | None = None,
+        seed: int | None = None,
+        **overrides: Any,
+    ) -> None:
+        self.core, self.interface = build_core_and_interface(
+            preset, config, overrides, 1, seed, frame, frame_params, render_mode
+        )
+        self.config = self.core.config
+        self.layout = self.core.layout
+        self.frame = frame
+        self.render_mode = render_mode
+        M, D = self.core.n_agents, self.config.dim
+        n = self.interface.observation_size
+        bound = self.interface.observation_bound
+        self.observation_space = spaces.Box(-bound, bound, (M * n,), np.float32)
+        self.action_space = spaces.Box(-1.0, 1.0, (M * D,), np.float32)
+        self.physical_obs: np.ndarray | None = None
+        self._live = False
+        self._frames = SwarmFrames(self.core, render_mode)
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        if seed is not None and (
+            isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0
+        ):
+            raise ValueError(f"seed={seed!r} is invalid: must be None or an int >= 0")
+        res = self.core.reset(seed=None if seed is None else [int(seed)], options=options)
+        # the swarm's own generator is the env's np_random (one source of randomness)
+        self._np_random = self.core.rngs[0]
+        self._np_random_seed = -1 if seed is None else int(seed)
+        self._live = True
+        self._frames.reset()
+        self.physical_obs = res.obs[0]
+        obs = self.interface.encode(res.obs[0]).reshape(-1)
+        if self.render_mode == "human":
+            self.render()
+        return obs, self._info(res.info)
+
+    def step(self, action: Any):
+        if not self._live:
+            raise RuntimeError("the episode has ended (or reset() was never called); call reset()")
+        M, D = self.core.n_agents, self.config.dim
+        a = check_policy_actions(action, (M * D,), "action").reshape(M, D)
+        res = held_step(self.core, self.interface, self.physical_obs[None], a[None])
+        reward = float(np.mean(res.reward[0]))
+        terminated = bool(res.terminated[0])
+        truncated = bool(res.truncated[0])
+        self._live = not (terminated or truncated)
+        self.physical_obs = res.obs[0]
+        obs = self.interface.encode(res.obs[0]).reshape(-1)
+        if self.render_mode == "human":
+            self.render()
+        return obs, reward, terminated, truncated, self._info(res.info)
+
+    @staticmethod
+    def _info(info: Mapping[str, np.ndarray]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for k, v in info.items():
+            out[k] = v[0].item() if v.ndim == 1 else v[0].copy()
+        return out
+
+    def render(self):
+        return self._frames.render(0)
+
+    def close(self) -> None:
+        self._frames.close()
+

@@ -1,0 +1,169 @@
+"""The native SB3 VecEnv: DummyVecEnv's contract, SB3 wrappers, attributes, and the sb3: loader."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("stable_baselines3")
+
+import gymnasium as gym  # noqa: E402
+from stable_baselines3 import PPO  # noqa: E402
+from stable_baselines3.common.vec_env import DummyVecEnv, VecCheckNan, VecMonitor  # noqa: E402
+
+from baselines import make_pair_policy  # noqa: E402
+from baselines.rollout import rollout, trace_metrics  # noqa: E402
+from pairflock_env import ENV_ID, make_config, parallel_env  # noqa: E402
+from pairflock_env.envs import PairFlockVecEnv  # noqa: E402
+
+SMALL = dict(n_uavs=12, pair_accel_limit=50.0)
+
+
+@pytest.mark.parametrize("frame", ["pair", "world"])
+def test_native_vecenv_follows_dummy_vec_env_exactly(frame):
+    """Rows b*M+m of the native VecEnv == agent m of sub-env b of a DummyVecEnv over the
+    Gymnasium single env: observations, rewards, dones, terminal_observation and
+    TimeLimit.truncated, through several auto-resets, with per-swarm seeds from seed()."""
+    B, M, steps = 3, 2, 9
+    cycles = 13 if frame == "pair" else 4  # pair: 3 decisions of 5 steps (the last cut short)
+    kw = dict(SMALL, frame=frame, max_cycles=cycles)
+    native = PairFlockVecEnv(num_swarms=B, **kw)
+    dummy = DummyVecEnv([lambda: gym.make(ENV_ID, **kw) for _ in range(B)])
+    assert native.num_envs == B * M
+    assert native.seed(21) == [21, 21, 22, 22, 23, 23]
+    dummy.seed(21)
+    on, od = native.reset(), dummy.reset()
+    np.testing.assert_array_equal(on, od.reshape(B * M, -1))
+    rng = np.random.default_rng(0)
+    n_done = 0
+    for _ in range(steps):
+        a = rng.uniform(-1, 1, (B * M, 2)).astype(np.float32)
+        on, rn, dn, infn = native.step(a)
+        od, rd, dd, infd = dummy.step(a.reshape(B, M * 2))
+        np.testing.assert_array_equal(on, od.reshape(B * M, -1))
+        np.testing.assert_allclose(rn.reshape(B, M).mean(axis=1), rd, rtol=1e-6, atol=1e-6)
+        np.testing.assert_array_equal(dn, np.repeat(dd, M))
+        assert rn.dtype == np.float32 and dn.dtype == bool
+        for i in range(B * M):
+            b, m = divmod(i, M)
+            assert infn[i]["TimeLimit.truncated"] == infd[b]["TimeLimit.truncated"]
+            assert ("terminal_observation" in infn[i]) == ("terminal_observation" in infd[b])
+            if "terminal_observation" in infn[i]:
+                np.testing.assert_array_equal(
+                    infn[i]["terminal_observation"],
+                    infd[b]["terminal_observation"].reshape(M, -1)[m],
+                )
+        n_done += int(dd.sum())
+    per_episode = -(-cycles // native.interface.decision_period)
+    assert n_done == B * (steps // per_episode) and n_done >= 2 * B
+
+
+def test_seed_matches_pettingzoo_and_options_apply_per_swarm():
+    env = PairFlockVecEnv(num_swarms=2, frame="world", **SMALL)
+    env.seed(5)
+    obs = env.reset().reshape(2, 2, -1)
+    for b in range(2):
+        po, _ = parallel_env(**SMALL).reset(seed=5 + b)
+        np.testing.assert_array_equal(obs[b, 0], po["uav_0"])
+        np.testing.assert_array_equal(obs[b, 1], po["uav_1"])
+    q = np.zeros((12, 2))
+    q[:, 0] = np.arange(12) * 3.0
+    env.set_options([{"positions": q}] * 2 + [{}] * 2)
+    env.reset()
+    np.testing.assert_array_equal(env.core.q[0], q)
+    assert not np.array_equal(env.core.q[1], q)
+    env.set_options([{"positions": q}, {}, {}, {}])
+    with pytest.raises(ValueError, match="rows of one swarm share"):
+        env.reset()
+
+
+def test_attributes_methods_and_bad_actions():
+    env = PairFlockVecEnv(num_swarms=2, render_mode="rgb_array", **SMALL)
+    env.reset()
+    assert env.get_attr("agent") == ["uav_0", "uav_1", "uav_0", "uav_1"]
+    assert env.get_attr("swarm", indices=[1, 2]) == [0, 1]
+    assert env.get_attr("np_random", indices=2)[0] is env.core.rngs[1]
+    env.set_attr("curriculum_level", 3, indices=[0, 1])
+    assert env.get_attr("curriculum_level", indices=[0, 1]) == [3, 3]
+    with pytest.raises(AttributeError):
+        env.get_attr("curriculum_level", indices=[2])
+    with pytest.raises(AttributeError, match="read-only"):
+        env.set_attr("config", None)
+    st = env.env_method("swarm_state", indices=[3])[0]
+    np.testing.assert_array_equal(st["positions"], env.core.q[1])
+    frames = env.env_method("render", indices=[0])
+    assert frames[0].ndim == 3
+    assert env.get_images()[0].shape == frames[0].shape
+    assert env.env_is_wrapped(gym.Wrapper) == [False] * 4
+    assert env.has_attr("partner") and not env.has_attr("nope")
+    q0 = env.core.q.copy()
+    for bad, exc in [(np.full((4, 2), np.inf), ValueError), (np.zeros((2, 2)), ValueError),
+                     (np.array([["x", "y"]] * 4), TypeError)]:  # fmt: skip
+        with pytest.raises(exc, match="actions"):
+            env.step(bad)
+        np.testing.assert_array_equal(env.core.q, q0)
+    with pytest.raises(ValueError, match="info_keys"):
+        PairFlockVecEnv(info_keys=["pair_eror"])
+    with pytest.raises(IndexError):
+        env.get_attr("agent", indices=[9])
+
+
+def test_state_snapshot_continues_identically():
+    env = PairFlockVecEnv(num_swarms=2, seed=3, max_cycles=20, **SMALL)
+    env.reset()
+    a = np.full((4, 2), 0.3, np.float32)
+    env.step(a)
+    snap = env.get_state()
+    first = [env.step(a) for _ in range(6)]
+    env.set_state(snap)
+    again = [env.step(a) for _ in range(6)]
+    for x, y in zip(first, again):
+        np.testing.assert_array_equal(x[0], y[0])
+        np.testing.assert_array_equal(x[1], y[1])
+        np.testing.assert_array_equal(x[2], y[2])
+    with pytest.raises(ValueError, match="different config"):
+        PairFlockVecEnv(num_swarms=2, n_uavs=13).set_state(snap)
+
+
+def test_sb3_wrappers_and_ppo_train_on_native_vecenv():
+    env = VecCheckNan(VecMonitor(PairFlockVecEnv(num_swarms=2, max_cycles=30, info_keys="all",
+                                                 **SMALL)), raise_exception=True)  # fmt: skip
+    model = PPO("MlpPolicy", env, n_steps=16, batch_size=32, n_epochs=1, seed=0, device="cpu")
+    model.learn(128)
+    assert model.num_timesteps == 128
+    obs, r, d, infos = env.step(np.zeros((4, 2), np.float32))
+    assert "pair_error" in infos[0] and "sim_time" in infos[0]
+
+
+def test_sb3_loader_in_the_action_slot(tmp_path):
+    """make_pair_policy("sb3:<path>", env) loads a model saved with its interface and acts on
+    the env's standard observation; it holds its decision for decision_period steps."""
+    from baselines.sb3_policy import METADATA_KEY
+
+    venv = PairFlockVecEnv(num_swarms=1, **SMALL)
+    model = PPO("MlpPolicy", venv, n_steps=8, batch_size=16, n_epochs=1, seed=0, device="cpu")
+    setattr(model, METADATA_KEY, {"algo": "PPO", "interface": venv.interface.to_dict()})
+    path = tmp_path / "m.zip"
+    model.save(path)
+    cfg = make_config("paper", horizon=0.3, **SMALL)
+    pol = make_pair_policy(f"sb3:{path}", cfg)
+    pz = parallel_env(config=cfg)
+    obs, _ = pz.reset(seed=0)
+    act, state = pol.predict(obs["uav_0"])
+    assert act.shape == (2,) and act.dtype == np.float32 and np.all(np.abs(act) <= 1.0)
+    batch = np.stack([obs["uav_0"], obs["uav_1"]])
+    a1, st = pol.predict(batch, episode_start=np.ones(2, bool))
+    held = st[0].copy()
+    for _ in range(4):  # decisions are held for 5 calls when the state is passed back
+        a1, st = pol.predict(batch, state=st, episode_start=np.zeros(2, bool))
+        np.testing.assert_array_equal(st[0], held)
+    rows = trace_metrics(rollout(cfg, pol, [0, 1]))
+    assert len(rows) == 2 and np.isfinite(rows[0]["ss_mean_error"])
+    with pytest.raises(FileNotFoundError):
+        make_pair_policy("sb3:/no/such/model.zip", cfg)
+    plain = tmp_path / "plain.zip"
+    PPO("MlpPolicy", venv, n_steps=8, batch_size=16, device="cpu").save(plain)
+    with pytest.raises(ValueError, match="not a pairflock model"):
+        make_pair_policy(f"sb3:{plain}", cfg)
+    with pytest.raises(ValueError, match="observes shape"):
+        make_pair_policy(f"sb3:{path}", make_config("paper", dim=3, n_uavs=12))
