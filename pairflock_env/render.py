@@ -13,7 +13,14 @@ import warnings
 
 import numpy as np
 
-__all__ = ["SwarmRenderer", "draw_swarm", "fit_limits", "triangle_markers", "PAIR_COLORS"]
+__all__ = [
+    "SwarmArtists",
+    "SwarmRenderer",
+    "draw_swarm",
+    "fit_limits",
+    "triangle_markers",
+    "PAIR_COLORS",
+]
 
 PAIR_COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown")
 UNPAIRED_COLOR = "0.35"
@@ -56,6 +63,90 @@ def fit_limits(
     return (mid[0] - half, mid[0] + half, mid[1] - half, mid[1] + half)
 
 
+class SwarmArtists:
+    """The artists of one swarm picture on an Axes, created once and moved by :meth:`update`.
+
+    A video redraws the same picture hundreds of times; moving existing artists avoids
+    rebuilding the axes (ticks, labels) for every frame. :func:`draw_swarm` uses it for a
+    single picture, so both draw exactly the same thing.
+    """
+
+    def __init__(self, ax, n_uavs: int, pairs, d_m, *, leader: bool = True) -> None:
+        from matplotlib.collections import PolyCollection
+        from matplotlib.patches import Circle
+
+        self.ax = ax
+        self.pairs = tuple(tuple(int(i) for i in pr) for pr in pairs)
+        self.d_m = np.broadcast_to(np.asarray(d_m, dtype=float), (len(self.pairs),))
+        colors = [UNPAIRED_COLOR] * n_uavs
+        for k, (a, b) in enumerate(self.pairs):
+            colors[a] = colors[b] = PAIR_COLORS[k % len(PAIR_COLORS)]
+        self.triangles = PolyCollection(np.zeros((n_uavs, 3, 2)), facecolors=colors,
+                                        edgecolors="k", linewidths=0.3)  # fmt: skip
+        ax.add_collection(self.triangles, autolim=False)
+        # per pair: one circle around the converged pair (the paper's marker), or one around
+        # each member while they are still apart
+        self.circles = []
+        for k in range(len(self.pairs)):
+            color = PAIR_COLORS[k % len(PAIR_COLORS)]
+            trio = [Circle((0.0, 0.0), self.d_m[k], fill=False, lw=1.2, color=color)
+                    for _ in range(3)]  # fmt: skip
+            for c in trio:
+                ax.add_patch(c)
+            self.circles.append(trio)
+        self.leader = None
+        if leader:
+            (self.leader,) = ax.plot([], [], marker="*", ms=14, color="gold", mec="k", mew=0.8,
+                                     ls="none", label="virtual leader")  # fmt: skip
+        ax.set_aspect("equal")
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.grid(True, lw=0.3, alpha=0.5)
+        self.title = ax.set_title("", fontsize=10)
+
+    def update(
+        self,
+        q: np.ndarray,
+        p: np.ndarray,
+        leader_q: np.ndarray | None = None,
+        *,
+        headings: np.ndarray | None = None,
+        size: float | None = None,
+        limits: tuple[float, float, float, float] | None = None,
+        title: str | None = None,
+    ) -> np.ndarray:
+        """Move the picture to state q, p (N, dim) (x-y plane); arguments as in
+        :func:`draw_swarm`. Returns the headings used."""
+        q = np.asarray(q, dtype=float)
+        p = np.asarray(p, dtype=float)
+        xy = q[:, :2]
+        if limits is None:
+            limits = fit_limits(q, leader_q)
+        span = max(limits[1] - limits[0], limits[3] - limits[2])
+        if size is None:
+            size = 0.025 * span
+        h = _headings(p, headings)
+        self.triangles.set_verts(triangle_markers(xy, h, size))
+        for k, (a, b) in enumerate(self.pairs):
+            together, ca, cb = self.circles[k]
+            close = bool(np.linalg.norm(xy[a] - xy[b]) <= 2 * self.d_m[k])
+            together.set_visible(close)
+            ca.set_visible(not close)
+            cb.set_visible(not close)
+            together.center = tuple((xy[a] + xy[b]) / 2)
+            ca.center, cb.center = tuple(xy[a]), tuple(xy[b])
+        if self.leader is not None:
+            if leader_q is None:
+                self.leader.set_data([], [])
+            else:
+                lq = np.asarray(leader_q, dtype=float)
+                self.leader.set_data([lq[0]], [lq[1]])
+        self.ax.set_xlim(limits[0], limits[1])
+        self.ax.set_ylim(limits[2], limits[3])
+        self.title.set_text(title or "")
+        return h
+
+
 def draw_swarm(
     ax,
     q: np.ndarray,
@@ -81,51 +172,19 @@ def draw_swarm(
         arrows: draw velocity arrows (Figs. 5, 9, 12), length proportional to speed.
         limits: (xmin, xmax, ymin, ymax); default fits every UAV and the leader.
     """
-    from matplotlib.collections import PolyCollection
-    from matplotlib.patches import Circle
-
     q = np.asarray(q, dtype=float)
     p = np.asarray(p, dtype=float)
-    xy = q[:, :2]
     if limits is None:
         limits = fit_limits(q, leader_q)
+    art = SwarmArtists(ax, len(q), pairs, d_m, leader=leader_q is not None)
+    h = art.update(q, p, leader_q, headings=headings, size=size, limits=limits, title=title)
     span = max(limits[1] - limits[0], limits[3] - limits[2])
-    if size is None:
-        size = 0.025 * span
-    h = _headings(p, headings)
-    tris = triangle_markers(xy, h, size)
-    n = len(q)
-    colors = [UNPAIRED_COLOR] * n
-    d_m = np.broadcast_to(np.asarray(d_m, dtype=float), (len(pairs),))
-    for k, (a, b) in enumerate(pairs):
-        colors[a] = colors[b] = PAIR_COLORS[k % len(PAIR_COLORS)]
-    ax.add_collection(PolyCollection(tris, facecolors=colors, edgecolors="k", linewidths=0.3))
-    for k, (a, b) in enumerate(pairs):
-        color = PAIR_COLORS[k % len(PAIR_COLORS)]
-        if np.linalg.norm(xy[a] - xy[b]) <= 2 * d_m[k]:
-            # the paper's marker: one circle of radius d_m around the converged pair
-            ax.add_patch(Circle((xy[a] + xy[b]) / 2, d_m[k], fill=False, lw=1.2, color=color))
-        else:
-            for i in (a, b):  # still apart: circle each member
-                ax.add_patch(Circle(xy[i], d_m[k], fill=False, lw=1.2, color=color))
     speed = np.linalg.norm(p[:, :2], axis=1)
-    ref = float(np.percentile(speed, 90)) if n else 0.0
+    ref = float(np.percentile(speed, 90)) if len(q) else 0.0
     if arrows and ref > 0:
         # arrow length proportional to speed; most arrows at most ARROW_FRACTION of the view
-        ax.quiver(xy[:, 0], xy[:, 1], p[:, 0], p[:, 1], color="0.5", width=0.002,
+        ax.quiver(q[:, 0], q[:, 1], p[:, 0], p[:, 1], color="0.5", width=0.002,
                   angles="xy", scale_units="xy", scale=ref / (ARROW_FRACTION * span))  # fmt: skip
-    if leader_q is not None:
-        lq = np.asarray(leader_q, dtype=float)
-        ax.plot(lq[0], lq[1], marker="*", ms=14, color="gold", mec="k", mew=0.8, ls="none",
-                label="virtual leader")  # fmt: skip
-    ax.set_xlim(limits[0], limits[1])
-    ax.set_ylim(limits[2], limits[3])
-    ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.grid(True, lw=0.3, alpha=0.5)
-    if title:
-        ax.set_title(title, fontsize=10)
     return h
 
 
@@ -140,41 +199,41 @@ class SwarmRenderer:
         self._headings: np.ndarray | None = None
         self._fig = None
         self._canvas = None
-        self._ax = None
+        self._artists: SwarmArtists | None = None
         self._window = None
+        self._window_artists: SwarmArtists | None = None
 
     def reset(self) -> None:
         self._headings = None
 
-    def _axes(self):
-        """The frame's axes, created once: a fresh figure and a tight layout per frame cost
-        more than drawing the swarm, so frames reuse one axes with fixed margins."""
+    def _frame(self, n_uavs: int, leader: bool) -> SwarmArtists:
+        """The off-screen frame, built once with fixed pixel margins: rebuilding the axes
+        and a tight layout for every frame would cost more than drawing the swarm."""
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
-        if self._fig is None:
+        art = self._artists
+        if art is None or len(art.triangles.get_paths()) != n_uavs or (
+            (art.leader is not None) != leader
+        ):
             dpi = 100
-            self._fig = Figure(figsize=(self.size_px[0] / dpi, self.size_px[1] / dpi), dpi=dpi)
-            self._canvas = FigureCanvasAgg(self._fig)
             w, h = self.size_px
-            # margins in pixels: tick labels + axis label left/bottom, a two-line title on top
+            self._fig = Figure(figsize=(w / dpi, h / dpi), dpi=dpi)
+            self._canvas = FigureCanvasAgg(self._fig)
             self._fig.subplots_adjust(left=FRAME_MARGIN_PX["left"] / w,
                                       right=1 - FRAME_MARGIN_PX["right"] / w,
                                       bottom=FRAME_MARGIN_PX["bottom"] / h,
                                       top=1 - FRAME_MARGIN_PX["top"] / h)  # fmt: skip
-            self._ax = self._fig.add_subplot(1, 1, 1)
-        else:
-            self._ax.clear()
-        return self._ax
+            ax = self._fig.add_subplot(1, 1, 1)
+            self._artists = SwarmArtists(ax, n_uavs, self.pairs, self.d_m, leader=leader)
+        return self._artists
 
     def rgb_array(self, q, p, leader_q, title: str | None = None, *, limits=None) -> np.ndarray:
         """One frame (H, W, 3) uint8 of swarm state q, p (N, dim); ``limits`` as in
         :func:`draw_swarm` (default: fit this frame)."""
-        ax = self._axes()
-        self._headings = draw_swarm(
-            ax, q, p, self.pairs, self.d_m, leader_q, headings=self._headings, title=title,
-            limits=limits,
-        )
+        art = self._frame(len(q), leader_q is not None)
+        self._headings = art.update(q, p, leader_q, headings=self._headings, title=title,
+                                    limits=limits)  # fmt: skip
         self._canvas.draw()
         return np.asarray(self._canvas.buffer_rgba())[..., :3].copy()
 
@@ -192,16 +251,14 @@ class SwarmRenderer:
                 )
                 self._window = False
             return
-        if not self._window:
+        if not self._window or not plt.fignum_exists(self._window.number):
             self._window = plt.figure(figsize=(6.4, 6.4))
-        fig = self._window
-        fig.clear()
-        ax = fig.add_subplot(1, 1, 1)
-        self._headings = draw_swarm(
-            ax, q, p, self.pairs, self.d_m, leader_q, headings=self._headings, title=title,
-            limits=limits,
+            self._window_artists = SwarmArtists(self._window.add_subplot(1, 1, 1), len(q),
+                                                self.pairs, self.d_m, leader=True)  # fmt: skip
+        self._headings = self._window_artists.update(
+            q, p, leader_q, headings=self._headings, title=title, limits=limits
         )
-        fig.canvas.draw_idle()
+        self._window.canvas.draw_idle()
         plt.pause(0.001)
 
     def close(self) -> None:
@@ -209,5 +266,5 @@ class SwarmRenderer:
             import matplotlib.pyplot as plt
 
             plt.close(self._window)
-        self._window = None
-        self._fig = self._canvas = self._ax = None
+        self._window = self._window_artists = None
+        self._fig = self._canvas = self._artists = None
