@@ -1,0 +1,249 @@
+"""The training CLI: help, a subprocess smoke run, determinism, exact resume, Ctrl-C, errors."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+pytest.importorskip("stable_baselines3")
+
+ROOT = Path(__file__).resolve().parents[1]
+ENV = {**os.environ, "OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
+
+#: a tiny task: 8-UAV swarms, 1-s training episodes, 0.5-s evaluation on one seed
+TINY = ["--set", "n_uavs=8", "--set", "pair_accel_limit=50", "--set", "max_cycles=100",
+        "--eval-set", "horizon=0.5", "--eval-seeds", "1000", "--num-swarms", "2",
+        "--hp", "n_steps=16", "--hp", "batch_size=32", "--hp", "n_epochs=2",
+        "--hp", "policy_kwargs.net_arch=[16,16]"]  # fmt: skip
+
+
+def _cli(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "train", *args], cwd=ROOT, env=ENV,
+                          capture_output=True, text=True, timeout=timeout)  # fmt: skip
+
+
+def _settings(**flags):
+    from train.settings import settings_from_sources
+
+    base = dict(env={"n_uavs": 8, "pair_accel_limit": 50.0, "max_cycles": 100},
+                eval_env={"horizon": 0.5}, eval_seeds=[1000], num_swarms=2,
+                eval_baselines=["smc"], tensorboard=False)  # fmt: skip
+    hp = dict(n_steps=16, batch_size=32, n_epochs=2, policy_kwargs={"net_arch": [16, 16]})
+    if flags.get("algo") in ("sac", "td3"):
+        hp = dict(buffer_size=2000, learning_starts=64, batch_size=32,
+                  policy_kwargs={"net_arch": [16, 16]})  # fmt: skip
+    base["hyperparameters"] = {**hp, **flags.pop("hyperparameters", {})}
+    base.update(flags)
+    return settings_from_sources(base)
+
+
+def _params(zip_path: Path) -> dict:
+    with zipfile.ZipFile(zip_path) as z:
+        out = {"policy": torch.load(io.BytesIO(z.read("policy.pth")), weights_only=True)}
+        for name in z.namelist():
+            if name.endswith("optimizer.pth"):
+                out[name] = torch.load(io.BytesIO(z.read(name)), weights_only=False)
+    return out
+
+
+def _assert_same_params(a: Path, b: Path) -> None:
+    pa, pb = _params(a), _params(b)
+    assert pa["policy"].keys() == pb["policy"].keys()
+    for k in pa["policy"]:
+        assert torch.equal(pa["policy"][k], pb["policy"][k]), k
+    opt = [k for k in pa if k.endswith("optimizer.pth")]
+    assert opt, "the model file holds the optimizer state"
+    for k in opt:
+        sa, sb = pa[k]["state"], pb[k]["state"]
+        assert sa.keys() == sb.keys()
+        for i in sa:
+            for name, v in sa[i].items():
+                assert torch.equal(torch.as_tensor(v), torch.as_tensor(sb[i][name])), (k, i, name)
+
+
+def _curve(run: Path) -> list[dict]:
+    """The SB3 training log without wall-clock columns."""
+    rows = []
+    for f in sorted((run / "logs").glob("progress_*.csv")):
+        with open(f, encoding="utf-8") as fh:
+            for r in csv.DictReader(fh):
+                rows.append({k: v for k, v in r.items() if not k.startswith("time/")})
+    return rows
+
+
+def test_help_documents_every_cli():
+    out = _cli("--help")
+    assert out.returncode == 0
+    for flag in ("--algo", "--config", "--set", "--hp", "--total-steps", "--seed", "--out",
+                 "--resume", "--eval-every", "--checkpoint-every", "--time-limit", "Ctrl-C"):  # fmt: skip
+        assert flag in out.stdout, flag
+    for mod in ("train.evaluate", "train.throughput"):
+        r = subprocess.run([sys.executable, "-m", mod, "--help"], cwd=ROOT, env=ENV,
+                           capture_output=True, text=True, timeout=60)  # fmt: skip
+        assert r.returncode == 0 and "usage:" in r.stdout
+
+
+def test_cli_smoke_run_writes_a_complete_run_directory(tmp_path):
+    out = tmp_path / "run"
+    r = _cli(*TINY, "--total-steps", "256", "--eval-every", "128", "--checkpoint-every", "128",
+             "--eval-baselines", "smc", "--seed", "3", "--out", str(out), "--quiet")  # fmt: skip
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "completed: 256 steps" in r.stderr
+    for name in ("settings.yaml", "run.json", "eval.csv", "eval_baselines.json", "best_model.zip",
+                 "final_model.zip", "checkpoints/latest"):  # fmt: skip
+        assert (out / name).is_file(), name
+    assert list((out / "tensorboard").iterdir()), "tensorboard events"
+    rec = json.loads((out / "run.json").read_text())
+    assert rec["status"] == "completed" and rec["num_timesteps"] == 256
+    assert rec["seed"] == 3 and rec["config"]["n_uavs"] == 8
+    assert rec["versions"]["stable-baselines3"] and "git_commit" in rec
+    assert rec["interface"]["name"] == "pair" and rec["final_summary"]["ss_error_median"] >= 0
+    with open(out / "eval.csv", encoding="utf-8") as f:
+        steps = [int(row["step"]) for row in csv.DictReader(f)]
+    assert steps[0] < 128 and steps[-1] == 256  # initial policy, periodic, final
+    # the saved policy plugs into the action slot and runs the baselines' rollout
+    from baselines import make_pair_policy
+    from baselines.rollout import rollout, trace_metrics
+    from pairflock_env import make_config
+
+    cfg = make_config("paper", n_uavs=8, pair_accel_limit=50.0, horizon=0.3)
+    pol = make_pair_policy(f"sb3:{out / 'final_model.zip'}", cfg)
+    rows = trace_metrics(rollout(cfg, pol, [5]))
+    assert np.isfinite(rows[0]["ss_mean_error"])
+
+
+def test_same_seed_same_training_curve_and_evaluation(tmp_path):
+    from train.run import train
+
+    runs = []
+    for name in ("a", "b"):
+        s = _settings(seed=7, total_steps=512, eval_every=256, checkpoint_every=0)
+        train(s, tmp_path / name, quiet=True)
+        runs.append(tmp_path / name)
+    ca, cb = _curve(runs[0]), _curve(runs[1])
+    assert len(ca) >= 4 and ca == cb
+    ea = (runs[0] / "eval.csv").read_text().splitlines()
+    eb = (runs[1] / "eval.csv").read_text().splitlines()
+    strip = lambda lines: [",".join(x for i, x in enumerate(r.split(",")) if i != 1) for r in lines]  # noqa: E731
+    assert strip(ea) == strip(eb)  # identical evaluations (wall time column aside)
+    _assert_same_params(runs[0] / "final_model.zip", runs[1] / "final_model.zip")
+    other = _settings(seed=8, total_steps=512, eval_every=0, checkpoint_every=0)
+    train(other, tmp_path / "c", quiet=True)
+    assert _curve(tmp_path / "c") != ca
+
+
+@pytest.mark.parametrize("algo", ["ppo", "sac"])
+def test_resume_continues_exactly(tmp_path, algo):
+    """A run resumed from a mid-run checkpoint ends bit-identical to the uninterrupted run:
+    step count, parameters, optimizer state and (SAC) replay buffer."""
+    from train.checkpoint import latest_checkpoint
+    from train.run import train
+
+    total, every = (512, 256) if algo == "ppo" else (192, 96)
+    s = _settings(algo=algo, seed=1, total_steps=total, eval_every=0, checkpoint_every=every,
+                  keep_checkpoints=0)  # fmt: skip
+    full = tmp_path / "full"
+    train(s, full, quiet=True)
+    ckpts = sorted((full / "checkpoints").glob("step_*"))
+    assert len(ckpts) >= 2
+    mid = ckpts[0]
+    part = tmp_path / "part"
+    shutil.copytree(full, part, ignore=shutil.ignore_patterns("final_model.zip"))
+    for c in sorted((part / "checkpoints").glob("step_*"))[1:]:
+        shutil.rmtree(c)
+    (part / "checkpoints" / "latest").write_text(mid.name + "\n")
+    assert latest_checkpoint(part).name == mid.name
+    if algo == "sac":
+        assert (mid / "replay_buffer.pkl").is_file()
+    res = train(s, part, resume=part, quiet=True)
+    assert res.num_timesteps == total and res.status == "completed"
+    _assert_same_params(full / "final_model.zip", part / "final_model.zip")
+    if algo == "sac":
+        import pickle
+
+        last = sorted((full / "checkpoints").glob("step_*"))[-1].name
+        with open(full / "checkpoints" / last / "replay_buffer.pkl", "rb") as f:
+            ra = pickle.load(f)
+        with open(part / "checkpoints" / last / "replay_buffer.pkl", "rb") as f:
+            rb = pickle.load(f)
+        assert ra.pos == rb.pos and ra.full == rb.full and ra.pos > 0
+        np.testing.assert_array_equal(ra.observations[: ra.pos], rb.observations[: rb.pos])
+    assert (part / f"run_resumed_{int(mid.name.split('_')[1]):012d}.json").is_file()
+
+
+def test_ctrl_c_saves_a_checkpoint_and_exits_cleanly(tmp_path):
+    out = tmp_path / "run"
+    p = subprocess.Popen([sys.executable, "-m", "train", *TINY, "--total-steps", "1e9",
+                          "--eval-every", "0", "--eval-baselines", "--out", str(out), "--quiet"],
+                         cwd=ROOT, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True)  # fmt: skip
+    try:
+        deadline = time.time() + 90
+        while time.time() < deadline and not list((out / "logs").glob("progress_*.csv")):
+            time.sleep(0.5)
+        time.sleep(3.0)  # let it learn for a moment
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 130, err[-2000:]
+    assert "Traceback" not in err and "interrupted" in err
+    rec = json.loads((out / "run.json").read_text())
+    assert rec["status"].startswith("interrupted") and rec["num_timesteps"] > 0
+    assert (out / "final_model.zip").is_file()
+    from train.checkpoint import latest_checkpoint
+
+    ck = latest_checkpoint(out)
+    assert json.loads((ck / "checkpoint.json").read_text())["num_timesteps"] == rec["num_timesteps"]
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--set", "n_uav=20"], "Did you mean 'n_uavs'"),
+        (["--hp", "learning_rat=1e-3"], "Did you mean 'learning_rate'"),
+        (["--set", "pair_accel_limit=-5"], "pair_accel_limit=-5"),
+        (["--frame-param", "w_error=-1"], "w_error=-1"),
+        (["--eval-baselines", "smcc"], "eval_baselines entry 'smcc'"),
+        (["--hp", "seed=3"], "set by the CLI"),
+    ],
+)
+def test_bad_settings_are_named(tmp_path, capsys, args, message):
+    from train.cli import main
+
+    with pytest.raises(SystemExit) as e:
+        main([*args, "--out", str(tmp_path / "x")])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and message in err, err
+    assert not (tmp_path / "x").exists()
+
+
+def test_resume_refuses_changes_and_out_is_protected(tmp_path, capsys):
+    from train.cli import main
+
+    (tmp_path / "full").mkdir()
+    (tmp_path / "full" / "something").write_text("x")
+    for argv, message in [
+        ([*TINY, "--total-steps", "64", "--out", str(tmp_path / "full")], "--overwrite"),
+        (["--resume", str(tmp_path / "nothing")], "no checkpoint"),
+        (["--resume", str(tmp_path / "full"), "--algo", "sac"], "cannot change"),
+        (["--total-steps", "64"], "--out is required"),
+    ]:
+        with pytest.raises(SystemExit) as e:
+            main(argv)
+        err = capsys.readouterr().err
+        assert e.value.code == 2 and message in err, err

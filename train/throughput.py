@@ -1,0 +1,157 @@
+"""SB3 training throughput: the native batched VecEnv vs PettingZoo -> SuperSuit -> SB3.
+
+    python -m train.throughput                       # PPO, N = 20, 16 swarms, 3 repeats
+    python -m train.throughput --algo sac --steps 20000 --num-swarms 8
+
+Both routes run the same task (the raw world-frame observation, action and reward, since that
+is what the PettingZoo env offers), the same number of rows (swarms x paired UAVs), the same
+algorithm and hyperparameters, in this one process with one torch thread. For each route it
+measures (a) environment steps per second with random actions and (b) SB3 training steps per
+second including learning (``model.learn``), after a warm-up; the routes alternate
+``--repeats`` times and the median is reported. Writes ``--out`` (JSON, with package versions
+and the git commit). Timings on a shared machine are noisy: compare the ratio, and rerun on a
+quiet one for absolute numbers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+__all__ = ["main", "make_route"]
+
+ROUTES = ("native", "supersuit")
+
+
+def make_route(route: str, num_swarms: int, overrides: dict[str, Any], seed: int):
+    """The SB3 VecEnv of a route (raw world frame on both)."""
+    if route == "native":
+        from pairflock_env.envs.sb3 import PairFlockVecEnv
+
+        return PairFlockVecEnv(num_swarms=num_swarms, frame="world", seed=seed, **overrides)
+    if route == "supersuit":
+        try:
+            import supersuit as ss
+        except ImportError as e:  # pragma: no cover - depends on the install
+            raise SystemExit("the supersuit route needs: pip install supersuit") from e
+        from pairflock_env import parallel_env
+
+        v = ss.pettingzoo_env_to_vec_env_v1(parallel_env(seed=seed, **overrides))
+        return ss.concat_vec_envs_v1(v, num_swarms, num_cpus=0, base_class="stable_baselines3")
+    raise ValueError(f"route={route!r} is invalid: must be one of {ROUTES}")
+
+
+def _env_rate(venv, steps: int, seed: int) -> float:
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    venv.reset()
+    n = venv.num_envs
+    t0 = time.perf_counter()
+    k = 0
+    while k * n < steps:
+        venv.step(rng.uniform(-1, 1, (n, venv.action_space.shape[0])).astype(np.float32))
+        k += 1
+    return k * n / (time.perf_counter() - t0)
+
+
+def _learn_rate(venv, algo: str, hp: dict[str, Any], steps: int, seed: int) -> float:
+    import stable_baselines3 as sb3
+
+    model = getattr(sb3, algo.upper())("MlpPolicy", venv, seed=seed, device="cpu", verbose=0, **hp)
+    warm = hp.get("n_steps", 1) * venv.num_envs if algo == "ppo" else 2 * venv.num_envs
+    model.learn(warm)  # warm-up: JIT, allocations, first update
+    t0 = time.perf_counter()
+    model.learn(steps, reset_num_timesteps=False)
+    return (model.num_timesteps - warm) / (time.perf_counter() - t0)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m train.throughput",
+        description=__doc__.split("\n\n")[0],
+        epilog=__doc__.split("\n\n", 2)[2],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--algo", choices=("ppo", "sac", "td3"), default="ppo", help="algorithm (default ppo)")
+    p.add_argument("--n-uavs", type=int, default=20, help="swarm size N (default 20)")
+    p.add_argument("--num-swarms", type=int, default=16, help="swarms per VecEnv (default 16)")
+    p.add_argument("--steps", type=int, default=100_000,
+                   help="timed training steps per measurement (default 100000)")
+    p.add_argument("--env-steps", type=int, default=50_000,
+                   help="timed random-action env steps per measurement (default 50000)")
+    p.add_argument("--repeats", type=int, default=3, help="alternating repeats (default 3)")
+    p.add_argument("--hp", action="append", default=[], metavar="NAME=VALUE",
+                   help="SB3 hyperparameter for both routes (default: train.settings defaults "
+                   "with n_steps=128, batch_size=1024 for PPO)")
+    p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    p.add_argument("--out", type=Path, default=Path("results/throughput.json"),
+                   help="result file (default results/throughput.json)")
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    args = build_parser().parse_args(argv)
+    for name in ("n_uavs", "num_swarms", "steps", "env_steps", "repeats"):
+        if getattr(args, name) < 1:
+            raise SystemExit(f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: must be >= 1")
+    import numpy as np
+    import torch
+
+    torch.set_num_threads(1)
+    from baselines.io import run_record, write_json
+
+    from .settings import DEFAULT_HYPERPARAMETERS, parse_assignment
+
+    hp = {k: v for k, v in DEFAULT_HYPERPARAMETERS[args.algo].items() if k != "action_noise_std"}
+    hp["policy_kwargs"] = dict(hp.get("policy_kwargs", {}))
+    if args.algo == "ppo":
+        hp.update(n_steps=128, batch_size=1024)
+    else:
+        hp.update(buffer_size=max(args.steps * 2, 10_000), learning_starts=0)
+    for item in args.hp:
+        k, v = parse_assignment(item, "--hp")
+        hp[k] = v
+    overrides = {"n_uavs": args.n_uavs, "pair_accel_limit": 50.0, "max_cycles": 1000}
+    results: dict[str, dict[str, list[float]]] = {r: {"env": [], "learn": []} for r in ROUTES}
+    from tqdm import tqdm
+
+    bar = tqdm(total=args.repeats * len(ROUTES), desc="throughput", unit="run")
+    for rep in range(args.repeats):
+        for route in ROUTES:
+            venv = make_route(route, args.num_swarms, overrides, args.seed + rep)
+            results[route]["env"].append(_env_rate(venv, args.env_steps, args.seed))
+            results[route]["learn"].append(_learn_rate(venv, args.algo, hp, args.steps, args.seed))
+            venv.close()
+            bar.update()
+    bar.close()
+    med = {r: {k: float(np.median(v)) for k, v in d.items()} for r, d in results.items()}
+    ratio = {k: med["native"][k] / med["supersuit"][k] for k in ("env", "learn")}
+    rows = args.num_swarms * 2
+    summary = (
+        f"{args.algo.upper()}, N={args.n_uavs}, {args.num_swarms} swarms ({rows} rows), "
+        f"median of {args.repeats}:\n"
+        f"  env steps/s (random actions): native {med['native']['env']:.0f}, "
+        f"supersuit {med['supersuit']['env']:.0f}, ratio {ratio['env']:.2f}x\n"
+        f"  training steps/s (incl. learning): native {med['native']['learn']:.0f}, "
+        f"supersuit {med['supersuit']['learn']:.0f}, ratio {ratio['learn']:.2f}x"
+    )
+    write_json(args.out, run_record(
+        algo=args.algo, n_uavs=args.n_uavs, num_swarms=args.num_swarms, rows=rows,
+        steps=args.steps, env_steps=args.env_steps, repeats=args.repeats, hyperparameters=hp,
+        task=overrides, measurements=results, median=med, ratio=ratio,
+        load_average=list(os.getloadavg()), cpu_count=os.cpu_count(),
+    ))  # fmt: skip
+    print(summary)
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
