@@ -247,11 +247,18 @@ def steady_error_figure(
                        fontsize=8)  # fmt: skip
     ax.set_xlim(-0.6, len(scenarios) - 0.4)
     if log:
+        from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
         ax.set_yscale("log")
+        # plain numbers at 1-2-5 steps: decades alone are too sparse to read 0.2 m off
+        ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.yaxis.set_minor_formatter(NullFormatter())
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=10)
     ax.grid(True, axis="y", which="both", lw=0.3)
-    ax.legend(fontsize=8, loc="best")
+    # outside the axes: no box can hide behind it
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     fig.tight_layout()
     return fig
 
