@@ -43,6 +43,8 @@ from typing import Any
 
 import numpy as np
 
+from .report import stat_cell
+
 __all__ = [
     "CRITERIA",
     "PRESET",
@@ -222,17 +224,6 @@ def run_job(
 
 
 # --------------------------------------------------------------------------- report
-def _stat(values, fmt: str) -> str:
-    v = np.asarray(values, dtype=float)
-    ok = v[np.isfinite(v)]
-    if ok.size == 0:
-        return "never"
-    rng = f"{fmt.format(ok.min())}-{fmt.format(ok.max())}"
-    if ok.size < v.size:
-        return f"never in {v.size - ok.size}/{v.size}; others {rng}"
-    return f"{fmt.format(np.median(v))} [{rng}]"
-
-
 def _order(key: tuple[str, str]) -> tuple[int, int]:
     dyn, pol = key
     return ({"quadrotor": 0, "particle": 1}.get(dyn, 2),
@@ -252,7 +243,7 @@ def summarize(rows: Sequence[dict[str, Any]]) -> str:
             elif key == "crashed":
                 cells.append(f"{sum(int(r[key]) for r in sel)}/{len(sel)}")
             else:
-                cells.append(_stat([r[key] for r in sel], fmt))
+                cells.append(stat_cell([r[key] for r in sel], fmt))
         lines.append(f"| {dyn} | {pol} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

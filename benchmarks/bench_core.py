@@ -18,33 +18,12 @@ os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
 import platform  # noqa: E402
-import statistics  # noqa: E402
-import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _timing import median_rate  # noqa: E402
 
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
 from pairflock_env.flocking import flocking_pass, pair_pass  # noqa: E402
-
-
-def _median_rate(fn, work: float, repeats: int, min_time: float) -> float:
-    """Median of ``work / seconds`` over ``repeats`` timed batches of calls to ``fn``."""
-    fn()  # warm up (JIT, caches)
-    n = 1
-    while True:  # calibrate the number of calls per batch
-        t0 = time.perf_counter()
-        for _ in range(n):
-            fn()
-        if time.perf_counter() - t0 >= min_time:
-            break
-        n *= 2
-    rates = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(n):
-            fn()
-        rates.append(work * n / (time.perf_counter() - t0))
-    return statistics.median(rates)
 
 
 def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
@@ -53,14 +32,14 @@ def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
     core.reset(seed=0)
     rng = np.random.default_rng(0)
     actions = rng.uniform(-0.2, 0.2, (B, core.n_agents, cfg.dim))
-    return _median_rate(lambda: core.step(actions), B * N, repeats, min_time)
+    return median_rate(lambda: core.step(actions), B * N, repeats, min_time)
 
 
 def bench_pettingzoo(N: int, repeats: int, min_time: float) -> float:
     env = parallel_env(preset="paper", n_uavs=N, max_cycles=10**9)
     env.reset(seed=0)
     act = {a: np.full(2, 0.1, np.float32) for a in env.agents}
-    return _median_rate(lambda: env.step(act), 1, repeats, min_time)
+    return median_rate(lambda: env.step(act), 1, repeats, min_time)
 
 
 def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
@@ -84,10 +63,10 @@ def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
         core.vehicle.advance(core.q.copy(), core.p.copy(), core.flock_accel)
 
     parts = {
-        "total core.step": 1e6 / _median_rate(lambda: core.step(actions), 1, repeats, 0.2),
-        "flocking sweep (numba)": 1e6 / _median_rate(flock, 1, repeats, 0.2),
-        "pair/neighbour sweep (numba)": 1e6 / _median_rate(pairs, 1, repeats, 0.2),
-        "integration (numpy)": 1e6 / _median_rate(integrate, 1, repeats, 0.2),
+        "total core.step": 1e6 / median_rate(lambda: core.step(actions), 1, repeats, 0.2),
+        "flocking sweep (numba)": 1e6 / median_rate(flock, 1, repeats, 0.2),
+        "pair/neighbour sweep (numba)": 1e6 / median_rate(pairs, 1, repeats, 0.2),
+        "integration (numpy)": 1e6 / median_rate(integrate, 1, repeats, 0.2),
     }
     parts["observations, rewards, infos (numpy)"] = parts["total core.step"] - sum(
         v for k, v in parts.items() if k != "total core.step"

@@ -20,10 +20,9 @@ for _var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMB
 
 import argparse  # noqa: E402
 import platform  # noqa: E402
-import statistics  # noqa: E402
-import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _timing import median_rate  # noqa: E402
 
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
 from pairflock_env.dynamics.quadrotor import QuadrotorModel  # noqa: E402
@@ -32,26 +31,6 @@ from pairflock_env.flocking import flocking_pass, pair_pass  # noqa: E402
 PRESET = "paper-quadrotor"
 TARGET_B1 = 20.0  # simulated s per wall s at B = 1 through PettingZoo
 TARGET_B64 = 300.0  # swarm-s per wall s at B = 64 through the core
-
-
-def _median_rate(fn, work: float, repeats: int, min_time: float) -> float:
-    """Median of ``work / seconds`` over ``repeats`` timed batches of calls to ``fn``."""
-    fn()  # warm up (JIT, caches)
-    n = 1
-    while True:  # calibrate the number of calls per batch
-        t0 = time.perf_counter()
-        for _ in range(n):
-            fn()
-        if time.perf_counter() - t0 >= min_time:
-            break
-        n *= 2
-    rates = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for _ in range(n):
-            fn()
-        rates.append(work * n / (time.perf_counter() - t0))
-    return statistics.median(rates)
 
 
 def _config(**overrides):
@@ -80,7 +59,7 @@ def bench_pettingzoo(repeats: int, min_time: float, with_policy: bool) -> float:
         def step():
             env.step(act)
 
-    return _median_rate(step, dt, repeats, min_time)
+    return median_rate(step, dt, repeats, min_time)
 
 
 def bench_core(B: int, repeats: int, min_time: float, dynamics: str = "quadrotor") -> float:
@@ -89,7 +68,7 @@ def bench_core(B: int, repeats: int, min_time: float, dynamics: str = "quadrotor
     core = PairFlockCore(cfg, num_envs=B)
     core.reset(seed=0)
     actions = np.random.default_rng(0).uniform(-0.2, 0.2, (B, core.n_agents, 3))
-    return _median_rate(lambda: core.step(actions), B * cfg.dt, repeats, min_time)
+    return median_rate(lambda: core.step(actions), B * cfg.dt, repeats, min_time)
 
 
 def bench_bare_model(B: int, repeats: int, min_time: float) -> float:
@@ -102,7 +81,7 @@ def bench_bare_model(B: int, repeats: int, min_time: float) -> float:
     p = np.zeros_like(q)
     model.reset_rows(np.arange(B), q, p)
     a = np.random.default_rng(0).uniform(-1.0, 1.0, q.shape)
-    return _median_rate(lambda: model.advance(q, p, a), B * cfg.dt, repeats, min_time)
+    return median_rate(lambda: model.advance(q, p, a), B * cfg.dt, repeats, min_time)
 
 
 def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
@@ -119,7 +98,7 @@ def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
     a_des = core.flock_accel.copy()
 
     def us(fn):
-        return 1e6 / _median_rate(fn, 1.0, repeats, min_time)
+        return 1e6 / median_rate(fn, 1.0, repeats, min_time)
 
     def flock():
         fl_out.update(flocking_pass(core._params, core.q, core.p, lq, lp, core.pinned,
