@@ -29,8 +29,9 @@ and by the loader, so training and evaluation cannot drift apart):
     the two network outputs, z'' = -accel_scale R_i^T (a_i + a_j) (z = partner offset). The
     network learns the closing law (``a_r > 0`` accelerates toward the partner) and, through
     asymmetric outputs, where the pair's midpoint goes (avoidance). The sum is scaled down as a
-    whole (direction kept) if any component would exceed ``pair_accel_limit``, so the env
-    never clips it and the action limit always holds.
+    whole (direction kept) if its magnitude ||u_i|| would exceed ``pair_accel_limit``: the
+    limit bounds the acceleration vector, not each axis (a box would allow sqrt(dim) times
+    more along a diagonal), and the env never clips.
 
     *Observation* (float32, every entry in [-5, 5], named in
     :attr:`PairFrameInterface.fields`): the pair error ``e = ||z|| - d_m`` and the relative
@@ -48,13 +49,20 @@ and by the loader, so training and evaluation cannot drift apart):
 
         r = - w_error * log(1 + |e| / error_scale) - w_progress * |e| / position_scale
             - w_effort * ||a||^2 / dim
-            - w_separation * max(0, safe_distance - sep) / safe_distance
+            - w_separation * max(0, safe_distance - s) / safe_distance
             - w_collision * [sep < collision_distance]
+            - w_cohesion * max(0, sep - cohesion_distance) / position_scale
 
     The logarithm keeps the transient (|e| ~ 250 m) and the last centimetres (|e| ~ 0.01 m)
     in the same few units, so the network is paid for precision; the linear term pays for
     closing the large initial distance quickly; ``sep`` is the distance to the nearest
-    non-partner UAV. A diverged swarm gets the core's ``-DIVERGENCE_PENALTY``.
+    non-partner UAV and ``s`` the smaller of ``sep`` and the closest approach to an observed
+    neighbour within ``approach_horizon`` at constant velocities, so that a collision course
+    costs before the UAVs are close (at 50 m/s a close pass lasts a few hundredths of a
+    second; its warning lasts half a second). The cohesion term keeps the pair in the flock:
+    nothing in the pair task itself stops both members from fleeing the swarm together, an
+    escape route from the separation penalty that an early policy found. A diverged swarm
+    gets the core's ``-DIVERGENCE_PENALTY``.
 
     *Decision period.* The policy acts every ``decision_period`` control steps (default 5:
     every 0.05 s at the paper's dt = 0.01 s) and its pair-frame action is held in between,
@@ -90,6 +98,7 @@ __all__ = [
     "PairFrameParams",
     "WorldInterface",
     "interface_from_dict",
+    "closest_approach",
     "make_interface",
     "pair_basis",
     "symlog",
@@ -125,6 +134,15 @@ def pair_basis(z: np.ndarray) -> np.ndarray:
         t2 = np.cross(er, t1)
         return np.stack([er, t1, t2], axis=-2)
     raise ValueError(f"dim={D} is invalid: the pair frame is defined for dim 2 or 3")
+
+
+def closest_approach(x: np.ndarray, w: np.ndarray, horizon: float):
+    """Time in [0, horizon] and distance of closest approach of relative positions ``x`` and
+    velocities ``w`` (..., dim) moving at constant velocity."""
+    w2 = np.einsum("...k,...k->...", w, w)
+    tca = np.clip(-np.einsum("...k,...k->...", x, w) / np.maximum(w2, 1e-9), 0.0, horizon)
+    miss = np.sqrt(np.einsum("...k,...k->...", x + w * tca[..., None], x + w * tca[..., None]))
+    return tca, miss
 
 
 def _to_frame(R: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -167,9 +185,14 @@ class LearningInterface:
         raise NotImplementedError
 
     def reward(
-        self, reward: np.ndarray, info: Mapping[str, np.ndarray], action: np.ndarray
+        self,
+        reward: np.ndarray,
+        info: Mapping[str, np.ndarray],
+        action: np.ndarray,
+        obs: np.ndarray | None = None,
     ) -> np.ndarray:  # pragma: no cover - abstract
-        """Per-agent learning reward (B, M) from the core's reward, infos and policy actions."""
+        """Per-agent learning reward (B, M) from the core's reward and infos of a control step,
+        the policy actions (B, M, dim) and the physical observation (B, M, obs_size) after it."""
         raise NotImplementedError
 
     def to_dict(self) -> dict[str, Any]:
@@ -214,7 +237,7 @@ class WorldInterface(LearningInterface):
         obs = self._check_obs(obs)
         return self._check_action(action, obs.shape[:-1])
 
-    def reward(self, reward, info, action):
+    def reward(self, reward, info, action, obs=None):
         return np.asarray(reward, dtype=np.float64)
 
 
@@ -248,11 +271,18 @@ class PairFrameParams:
     """m: accuracy scale of the reward's log(1 + |e| / error_scale)."""
     w_error: float = 0.1
     w_progress: float = 0.1
-    w_effort: float = 0.01
+    w_effort: float = 0.05
     w_separation: float = 5.0
-    safe_distance: float = 3.0
+    safe_distance: float = 2.0
     """m: below this distance to a non-partner UAV the separation penalty grows linearly."""
+    approach_horizon: float = 0.5
+    """s: the separation penalty uses the smaller of the distance now and the closest approach
+    to an observed neighbour within this time at constant velocities (0: now only)."""
     w_collision: float = 5.0
+    w_cohesion: float = 0.1
+    cohesion_distance: float | None = None
+    """m: a UAV whose nearest non-partner UAV is farther than this has left the flock and pays
+    w_cohesion * (sep - cohesion_distance) / position_scale; None: the perception radius."""
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -270,7 +300,7 @@ class PairFrameParams:
                         raise ValueError(f"threat_neighbors={v!r} is invalid: an int >= 0 or None")
                     object.__setattr__(self, f.name, int(v))
                 continue
-            if v is None and f.name == "accel_scale":
+            if v is None and f.name in ("accel_scale", "cohesion_distance"):
                 continue
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
                 raise TypeError(f"{f.name}={v!r} is invalid: must be a real number")
@@ -308,6 +338,8 @@ class PairFrameInterface(LearningInterface):
         p = PairFrameParams(**params)
         if p.accel_scale is None:
             p = dataclasses.replace(p, accel_scale=float(config.pair_accel_limit))
+        if p.cohesion_distance is None:
+            p = dataclasses.replace(p, cohesion_distance=float(config.radius))
         if p.threat_neighbors is None:
             p = dataclasses.replace(p, threat_neighbors=min(6, config.obs_neighbors))
         elif p.threat_neighbors > config.obs_neighbors:
@@ -331,6 +363,30 @@ class PairFrameInterface(LearningInterface):
     @property
     def observation_size(self) -> int:
         return self._size
+
+    #: what each encoded field holds (for docs and readers of the encoded vector)
+    FIELD_DOCS = {
+        "error": "pair error e = norm(z) - d_m (z: partner offset), / position_scale",
+        "error_fine": "symlog(e / fine_position) / 8",
+        "rel_velocity": "partner velocity relative to self, pair frame (radial, tangential), "
+                        "/ velocity_scale",
+        "rel_velocity_fine": "symlog(relative velocity / fine_velocity) / 8",
+        "flock_difference": "f_partner - f_self in the pair frame, / pair_accel_limit",
+        "flock_accel": "own flocking command f_self in the pair frame, / pair_accel_limit",
+        "neighbor_offsets": "offsets of the threat-ranked neighbours, pair frame, / neighbor_scale",
+        "neighbor_velocities": "their velocities relative to self, pair frame, / velocity_scale",
+        "neighbor_mask": "1 where a neighbour slot holds a UAV",
+        "neighbor_tca": "time of closest approach in [0, tca_horizon], / tca_horizon",
+        "neighbor_miss": "distance at closest approach, / neighbor_scale",
+    }  # fmt: skip
+
+    def markdown_table(self) -> str:
+        """The encoded observation, field by field (generated from the interface itself)."""
+        rows = ["| slice | field | size | meaning |", "|---|---|---|---|"]
+        for name, sl in self.field_slices().items():
+            rows.append(f"| {sl.start}:{sl.stop} | `{name}` | {sl.stop - sl.start} | "
+                        f"{self.FIELD_DOCS[name]} |")  # fmt: skip
+        return "\n".join(rows)
 
     def field_slices(self) -> dict[str, slice]:
         out, k = {}, 0
@@ -363,10 +419,7 @@ class PairFrameInterface(LearningInterface):
             x = lay.get(obs, "neighbor_offsets")  # (..., K, D)
             w = lay.get(obs, "neighbor_velocities")
             mask = lay.get(obs, "neighbor_mask")  # (..., K)
-            w2 = np.einsum("...k,...k->...", w, w)
-            tca = np.clip(-np.einsum("...k,...k->...", x, w) / np.maximum(w2, 1e-9), 0.0,
-                          p.tca_horizon)  # fmt: skip
-            miss = np.linalg.norm(x + w * tca[..., None], axis=-1)
+            tca, miss = closest_approach(x, w, p.tca_horizon)
             # the most threatening first: smallest distance at closest approach (empty last)
             order = np.argsort(np.where(mask > 0, miss, np.inf), axis=-1, kind="stable")
             order = order[..., : p.threat_neighbors]
@@ -399,19 +452,27 @@ class PairFrameInterface(LearningInterface):
         u = self.params.accel_scale * np.einsum("...ji,...j->...i", R, a)  # R^T a
         if self.params.feedforward:
             u = u + 0.5 * (lay.get(obs, "partner_flock_accel") - lay.get(obs, "flock_accel"))
-        over = np.max(np.abs(u), axis=-1, keepdims=True) / L
+        over = np.sqrt(np.einsum("...k,...k->...", u, u))[..., None] / L
         return u / (L * np.maximum(over, 1.0))
 
     # ------------------------------------------------------------------ reward
-    def reward(self, reward, info, action):
+    def reward(self, reward, info, action, obs=None):
         p, cfg = self.params, self.config
         err = np.abs(np.asarray(info["pair_error"], dtype=np.float64))
         sep = np.asarray(info["min_separation"], dtype=np.float64)
+        if obs is not None and p.approach_horizon > 0 and cfg.obs_neighbors:
+            obs = self._check_obs(obs)
+            _, miss = closest_approach(self.layout.get(obs, "neighbor_offsets"),
+                                       self.layout.get(obs, "neighbor_velocities"),
+                                       p.approach_horizon)  # fmt: skip
+            miss = np.where(self.layout.get(obs, "neighbor_mask") > 0, miss, np.inf)
+            sep = np.minimum(sep, miss.min(axis=-1))
         a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
         r = -p.w_error * np.log1p(err / p.error_scale) - p.w_progress * err / p.position_scale
         r -= p.w_effort * np.einsum("...k,...k->...", a, a) / cfg.dim
         r -= p.w_separation * np.maximum(0.0, p.safe_distance - sep) / p.safe_distance
         r -= p.w_collision * (sep < cfg.collision_distance)
+        r -= p.w_cohesion * np.maximum(0.0, sep - p.cohesion_distance) / p.position_scale
         diverged = np.asarray(info["diverged"], dtype=bool)
         r[diverged] = -DIVERGENCE_PENALTY
         return r

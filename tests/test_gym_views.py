@@ -190,9 +190,15 @@ def test_feedforward_makes_the_pair_a_double_integrator():
     expected = -itf.params.accel_scale * R.T @ (a[0] + a[1])
     # exact up to the float32 observation of the flocking commands
     np.testing.assert_allclose((v1 - v0) / cfg.dt, expected, rtol=1e-6, atol=1e-4)
-    # the applied action never exceeds the limit, direction kept when scaled down
-    big = itf.decode(res.obs[0], np.ones((2, 2)))
-    assert np.abs(big).max() <= 1.0 + 1e-12
+    # the applied acceleration vector never exceeds the limit in magnitude (not only per
+    # axis: a box would allow sqrt(2) times more along a diagonal), direction kept
+    ones = np.ones((2, 2))
+    lay = itf.layout
+    raw = itf.params.accel_scale * np.einsum("mji,mj->mi", pair_basis(lay.get(res.obs[0], "partner_offset")), ones)
+    raw += 0.5 * (lay.get(res.obs[0], "partner_flock_accel") - lay.get(res.obs[0], "flock_accel"))
+    big = itf.decode(res.obs[0], ones)
+    np.testing.assert_allclose(np.linalg.norm(big, axis=-1), 1.0, rtol=1e-12)
+    np.testing.assert_allclose(big, raw / np.linalg.norm(raw, axis=-1, keepdims=True), rtol=1e-9)
 
 
 def test_interface_encoding_is_bounded_finite_and_symmetric():

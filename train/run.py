@@ -68,10 +68,36 @@ def make_vec_env(settings: RunSettings, seed_offset: int = 0):
     return VecMonitor(env)
 
 
+def linear_schedule(start: float):
+    """SB3 schedule falling linearly from ``start`` to 0 over training (rl-zoo's ``lin_<v>``)."""
+
+    def schedule(progress_remaining: float) -> float:
+        return progress_remaining * start
+
+    schedule.start = start  # type: ignore[attr-defined]
+    return schedule
+
+
+def resolve_schedules(hp: dict[str, Any]) -> dict[str, Any]:
+    """``"lin_3e-4"`` for learning_rate / clip_range means a linear decay from 3e-4 to 0."""
+    out = dict(hp)
+    for key in ("learning_rate", "clip_range"):
+        v = out.get(key)
+        if isinstance(v, str) and v.startswith("lin_"):
+            try:
+                start = float(v[4:])
+            except ValueError:
+                raise ValueError(f"hyperparameter {key}={v!r} is invalid: use lin_<number>") from None
+            if start <= 0:
+                raise ValueError(f"hyperparameter {key}={v!r} is invalid: the start must be > 0")
+            out[key] = linear_schedule(start)
+    return out
+
+
 def _build_model(settings: RunSettings, venv):
     import stable_baselines3 as sb3
 
-    hp = settings.algo_hyperparameters()
+    hp = resolve_schedules(settings.algo_hyperparameters())
     cls = getattr(sb3, settings.algo.upper())
     if settings.algo == "td3":
         from stable_baselines3.common.noise import NormalActionNoise

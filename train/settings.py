@@ -20,7 +20,7 @@ YAML layout (every key optional; see ``train/configs/*.yaml``)::
     total_steps: 20000000
     seed: 0
     hyperparameters:           # SB3 constructor keyword arguments for the algorithm
-      learning_rate: 3.0e-4
+      learning_rate: 3.0e-4    # or lin_3e-4: linear decay to 0 (also clip_range)
       policy_kwargs: {net_arch: [128, 128], log_std_init: -1.0}
 """
 
@@ -176,6 +176,9 @@ class RunSettings:
                     f"{', '.join(k for k in POLICIES if not k.endswith(':'))}"
                 )
         _check_hyperparameters(self.algo, self.algo_hyperparameters())
+        from .run import resolve_schedules
+
+        resolve_schedules(self.algo_hyperparameters())
         return self
 
 

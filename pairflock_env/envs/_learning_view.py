@@ -102,7 +102,7 @@ def held_step(
     k = interface.decision_period
     if k == 1:
         res = core.step(interface.decode(obs, actions))
-        r = interface.reward(res.reward, res.info, actions)
+        r = interface.reward(res.reward, res.info, actions, res.obs)
         return HeldStep(res.obs, r, res.terminated, res.truncated, res.info)
     total = np.zeros((B, M))
     count = np.zeros(B)
@@ -116,7 +116,7 @@ def held_step(
             env_a[ended] = 0.0
         res = core.step(env_a)
         live = ~ended
-        total[live] += interface.reward(res.reward, res.info, actions)[live]
+        total[live] += interface.reward(res.reward, res.info, actions, res.obs)[live]
         count[live] += 1
         if out_obs is None:
             out_obs = res.obs.copy()
