@@ -26,6 +26,14 @@ def resolve_env(env: Any) -> tuple[PairFlockConfig, ObsLayout]:
     )
 
 
+def check_observation(observation: Any, size: int) -> np.ndarray:
+    """``observation`` as float64, shaped (size,) or (n, size); a clear error otherwise."""
+    obs = np.asarray(observation, dtype=np.float64)
+    if obs.ndim not in (1, 2) or obs.shape[-1] != size:
+        raise ValueError(f"observation has shape {obs.shape}; expected ({size},) or (n, {size})")
+    return obs
+
+
 class PairPolicy:
     """A per-agent pair controller with stable-baselines3's ``predict`` signature.
 
@@ -61,13 +69,7 @@ class PairPolicy:
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
         """Action(s) for one observation (obs_size,) or a batch (n, obs_size)."""
-        obs = np.asarray(observation, dtype=np.float64)
-        if obs.ndim not in (1, 2) or obs.shape[-1] != self.layout.size:
-            raise ValueError(
-                f"observation has shape {obs.shape}; expected ({self.layout.size},) or "
-                f"(n, {self.layout.size})"
-            )
-        u = self.accel(obs)
+        u = self.accel(check_observation(observation, self.layout.size))
         return (u / self.config.pair_accel_limit).astype(np.float32), state
 
     def __repr__(self) -> str:

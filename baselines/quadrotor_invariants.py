@@ -22,7 +22,7 @@ __all__ = ["hover_drift", "orthonormality_over_scenario", "step_response", "main
 PRESET = "paper-quadrotor"
 
 
-def _hovering_model(B: int = 1, N: int = 2, **overrides):
+def hovering_model(B: int = 1, N: int = 2, **overrides):
     """A bare quadrotor model (every UAV level, at rest, rotors at hover speed) and its state."""
     from pairflock_env import make_config
     from pairflock_env.dynamics.quadrotor import QuadrotorModel
@@ -39,7 +39,7 @@ def _hovering_model(B: int = 1, N: int = 2, **overrides):
 
 def hover_drift(seconds: float = 10.0, B: int = 2, N: int = 3) -> dict[str, float]:
     """Largest position and velocity drift (m, m/s) of hovering UAVs under a zero command."""
-    cfg, model, q, p = _hovering_model(B, N)
+    cfg, model, q, p = hovering_model(B, N)
     q0 = q.copy()
     a = np.zeros_like(q)
     saturated = False
@@ -89,7 +89,7 @@ def step_response(direction=(1.0, 0.0), size: float = 2.0, seconds: float = 2.0,
                   **overrides) -> dict[str, float]:  # fmt: skip
     """Response of the horizontal acceleration (along the command) to a step of ``size``
     m/s^2 from hover, sampled every physics step (500 Hz)."""
-    cfg, model, q, p = _hovering_model(dt=0.002, substeps=1, **overrides)
+    cfg, model, q, p = hovering_model(dt=0.002, substeps=1, **overrides)
     a = np.zeros_like(q)
     d = np.asarray(direction, dtype=float)
     a[0, 0, :2] = size * d / np.linalg.norm(d)

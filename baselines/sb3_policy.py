@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .policies import resolve_env
+from .policies import check_observation, resolve_env
 
 __all__ = ["SB3PairPolicy", "ALGORITHMS", "METADATA_KEY", "load_sb3_policy", "read_metadata"]
 
@@ -95,12 +95,7 @@ class SB3PairPolicy:
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
-        obs = np.asarray(observation, dtype=np.float64)
-        if obs.ndim not in (1, 2) or obs.shape[-1] != self.layout.size:
-            raise ValueError(
-                f"observation has shape {obs.shape}; expected ({self.layout.size},) or "
-                f"(n, {self.layout.size})"
-            )
+        obs = check_observation(observation, self.layout.size)
         batch = obs.reshape(-1, self.layout.size)
         n = batch.shape[0]
         k = self.interface.decision_period

@@ -7,12 +7,12 @@ and low-pass filtered so that it glides instead of jumping.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from .io import atomic_path
 
 __all__ = ["write_episode_video", "VIDEO_FORMATS"]
 
@@ -101,29 +101,19 @@ def _write_frames(path: Path, frames: list[np.ndarray], fps: int) -> Path:
         import imageio.v2 as imageio
     except ImportError:
         raise ImportError("--video needs imageio: pip install 'pairflock-env[video]'") from None
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=path.suffix)
-    os.close(fd)
-    try:
-        kwargs: dict[str, Any]
-        if path.suffix.lower() == ".mp4":
-            try:
-                import imageio_ffmpeg  # noqa: F401
-            except ImportError:
-                raise ImportError("mp4 video needs imageio-ffmpeg: pip install "
-                                  "'pairflock-env[video]' (or write a .gif)") from None  # fmt: skip
-            kwargs = dict(format="FFMPEG", fps=fps, codec="libx264", quality=6,
-                          pixelformat="yuv420p", macro_block_size=16,
-                          ffmpeg_log_level="error")  # fmt: skip
-        else:
-            kwargs = dict(format="GIF", duration=1000.0 / fps, loop=0)
-        with imageio.get_writer(tmp, **kwargs) as w:
-            for f in frames:
-                w.append_data(f)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    kwargs: dict[str, Any]
+    if path.suffix.lower() == ".mp4":
+        try:
+            import imageio_ffmpeg  # noqa: F401
+        except ImportError:
+            raise ImportError("mp4 video needs imageio-ffmpeg: pip install "
+                              "'pairflock-env[video]' (or write a .gif)") from None  # fmt: skip
+        kwargs = dict(format="FFMPEG", fps=fps, codec="libx264", quality=6,
+                      pixelformat="yuv420p", macro_block_size=16,
+                      ffmpeg_log_level="error")  # fmt: skip
+    else:
+        kwargs = dict(format="GIF", duration=1000.0 / fps, loop=0)
+    with atomic_path(path) as tmp, imageio.get_writer(tmp, **kwargs) as w:
+        for f in frames:
+            w.append_data(f)
     return path

@@ -75,6 +75,26 @@ class StepResult:
     """Arrays named in AGENT_INFO_KEYS (B, M), SWARM_INFO_KEYS (B,) and reward terms (B, M)."""
 
 
+def real_array(x: Any, name: str, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    """``x`` as a float64 array; ``TypeError`` naming ``name`` unless it is real (float, int or
+    uint), ``ValueError`` unless it has ``shape`` (when given) and is finite. The one check
+    behind every view's actions."""
+    if not (isinstance(x, np.ndarray) and x.dtype.kind in "fiu"):
+        try:
+            x = np.asarray(x)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name} must be a numeric array, got {type(x).__name__}") from None
+        if x.dtype.kind not in "fiu":
+            raise TypeError(f"{name} has dtype {x.dtype}; expected a real (float or int) dtype")
+    if shape is not None:
+        if x.shape != shape:
+            raise ValueError(f"{name} has shape {x.shape}, expected {shape}")
+        if not np.isfinite(x).all():
+            bad = np.argwhere(~np.isfinite(x))[0].tolist()
+            raise ValueError(f"{name} contains NaN or inf (first at index {bad}); it must be finite")
+    return x.astype(np.float64, copy=False)
+
+
 class PairFlockCore:
     """Vectorised pair-flocking simulator.
 
@@ -233,7 +253,7 @@ class PairFlockCore:
         full batch's current :class:`StepResult` (zero reward, no flags for reset rows).
         """
         rows = np.asarray(rows, dtype=np.int64).reshape(-1)
-        B, N, D = self.num_envs, self.config.n_uavs, self.config.dim
+        B, D = self.num_envs, self.config.dim
         if rows.size and (rows.min() < 0 or rows.max() >= B):
             raise ValueError(f"rows={rows.tolist()} is invalid: must be in [0, {B - 1}]")
         # --- validate everything before touching state -----------------------------
@@ -348,21 +368,12 @@ class PairFlockCore:
     def check_actions(self, actions: Any) -> np.ndarray:
         """Validate pair actions: shape (B, M, dim) (or (M, dim) when B = 1), real, finite."""
         B, M, D = self.num_envs, self.n_agents, self.config.dim
-        if isinstance(actions, np.ndarray) and actions.dtype.kind in "fiu":
-            a = actions
-        else:
-            try:
-                a = np.asarray(actions)
-            except (TypeError, ValueError):
-                raise TypeError(f"actions must be a numeric array, got {type(actions).__name__}") from None
-        if a.dtype.kind not in "fiu":
-            raise TypeError(f"actions have dtype {a.dtype}, expected a real (float or int) dtype")
+        a = real_array(actions, "actions")
         if a.shape != (B, M, D):
             if B == 1 and a.shape == (M, D):
                 a = a[None]
             else:
                 raise ValueError(f"actions have shape {a.shape}, expected ({B}, {M}, {D})")
-        a = a.astype(np.float64, copy=False)
         if not np.isfinite(a).all():
             bad = np.argwhere(~np.isfinite(a).all(axis=-1))[0]
             raise ValueError(

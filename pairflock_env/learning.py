@@ -29,16 +29,17 @@ and by the loader, so training and evaluation cannot drift apart):
     the two network outputs, z'' = -accel_scale R_i^T (a_i + a_j) (z = partner offset). The
     network learns the closing law (``a_r > 0`` accelerates toward the partner) and, through
     asymmetric outputs, where the pair's midpoint goes (avoidance). The sum is scaled down as a
-    whole (direction kept) if its magnitude ||u_i|| would exceed ``pair_accel_limit``: the
-    limit bounds the acceleration vector, not each axis (a box would allow sqrt(dim) times
-    more along a diagonal), and the env never clips.
+    whole (direction kept) if its magnitude ||u_i|| would exceed ``max_accel`` (by default the
+    ``pair_accel_limit`` the interface was built for, stored with a model) or the env's own
+    limit: the bound is on the acceleration vector, not on each axis (a box would allow
+    sqrt(dim) times more along a diagonal), and the env never clips.
 
     *Observation* (float32, every entry in [-5, 5], named in
     :attr:`PairFrameInterface.fields`): the pair error ``e = ||z|| - d_m`` and the relative
     velocity in the pair frame, each twice: linear (``/ position_scale``,
     ``/ velocity_scale``) for the large transient and ``symlog(x / fine_scale) / 8`` so that
     millimetres stay visible to the network; the flocking difference ``f_j - f_i`` and the own
-    flocking command (pair frame, ``/ limit``), which tell the network how much of its budget
+    flocking command (pair frame, ``/ max_accel``), which tell the network how much of its budget
     the feed-forward takes; and the ``threat_neighbors`` most threatening of the
     ``obs_neighbors`` nearest other UAVs, ranked by their distance at closest approach within
     ``tca_horizon`` if both kept their velocity: offset and velocity (pair frame,
@@ -250,6 +251,10 @@ class PairFrameParams:
     accel_scale: float | None = None
     """m/s^2 per unit of the policy action along a pair axis; None: the config's
     ``pair_accel_limit`` of the env the interface is first built for (then stored)."""
+    max_accel: float | None = None
+    """m/s^2: bound on the magnitude of the applied pair acceleration ||u_i||, kept with the
+    model so a policy trained under a limit obeys it in any env (the env's own
+    ``pair_accel_limit`` applies too, whichever is smaller); None: ``accel_scale``."""
     feedforward: bool = True
     """Add 1/2 (f_partner - f_self), cancelling the flocking difference on the pair."""
     position_scale: float = 50.0
@@ -300,7 +305,7 @@ class PairFrameParams:
                         raise ValueError(f"threat_neighbors={v!r} is invalid: an int >= 0 or None")
                     object.__setattr__(self, f.name, int(v))
                 continue
-            if v is None and f.name in ("accel_scale", "cohesion_distance"):
+            if v is None and f.name in ("accel_scale", "max_accel", "cohesion_distance"):
                 continue
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
                 raise TypeError(f"{f.name}={v!r} is invalid: must be a real number")
@@ -338,6 +343,8 @@ class PairFrameInterface(LearningInterface):
         p = PairFrameParams(**params)
         if p.accel_scale is None:
             p = dataclasses.replace(p, accel_scale=float(config.pair_accel_limit))
+        if p.max_accel is None:
+            p = dataclasses.replace(p, max_accel=p.accel_scale)
         if p.cohesion_distance is None:
             p = dataclasses.replace(p, cohesion_distance=float(config.radius))
         if p.threat_neighbors is None:
@@ -371,8 +378,8 @@ class PairFrameInterface(LearningInterface):
         "rel_velocity": "partner velocity relative to self, pair frame (radial, tangential), "
                         "/ velocity_scale",
         "rel_velocity_fine": "symlog(relative velocity / fine_velocity) / 8",
-        "flock_difference": "f_partner - f_self in the pair frame, / pair_accel_limit",
-        "flock_accel": "own flocking command f_self in the pair frame, / pair_accel_limit",
+        "flock_difference": "f_partner - f_self in the pair frame, / max_accel",
+        "flock_accel": "own flocking command f_self in the pair frame, / max_accel",
         "neighbor_offsets": "offsets of the threat-ranked neighbours, pair frame, / neighbor_scale",
         "neighbor_velocities": "their velocities relative to self, pair frame, / velocity_scale",
         "neighbor_mask": "1 where a neighbour slot holds a UAV",
@@ -398,7 +405,9 @@ class PairFrameInterface(LearningInterface):
     # ------------------------------------------------------------------ encode
     def encode(self, obs: np.ndarray) -> np.ndarray:
         obs = self._check_obs(obs)
-        p, L, lay = self.params, self.config.pair_accel_limit, self.layout
+        # flocking terms in units of the policy's own budget (stored with the model), so that
+        # the features mean the same in an env with another pair_accel_limit
+        p, L, lay = self.params, self.params.max_accel, self.layout
         z = lay.get(obs, "partner_offset")
         v = lay.get(obs, "partner_velocity")
         dm = lay.get(obs, "target_distance")
@@ -452,7 +461,8 @@ class PairFrameInterface(LearningInterface):
         u = self.params.accel_scale * np.einsum("...ji,...j->...i", R, a)  # R^T a
         if self.params.feedforward:
             u = u + 0.5 * (lay.get(obs, "partner_flock_accel") - lay.get(obs, "flock_accel"))
-        over = np.sqrt(np.einsum("...k,...k->...", u, u))[..., None] / L
+        bound = min(self.params.max_accel, L)
+        over = np.sqrt(np.einsum("...k,...k->...", u, u))[..., None] / bound
         return u / (L * np.maximum(over, 1.0))
 
     # ------------------------------------------------------------------ reward

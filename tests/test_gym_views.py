@@ -201,6 +201,18 @@ def test_feedforward_makes_the_pair_a_double_integrator():
     np.testing.assert_allclose(big, raw / np.linalg.norm(raw, axis=-1, keepdims=True), rtol=1e-9)
 
 
+def test_a_stored_interface_keeps_its_acceleration_limit_in_a_wider_env():
+    """A policy trained at 50 m/s^2 stays within 50 m/s^2 when evaluated where the env allows
+    1000 (the paper preset): the bound travels with the model."""
+    trained = make_interface("pair", make_config("paper", n_uavs=20, pair_accel_limit=50.0))
+    wide = make_config("paper", n_uavs=20)
+    itf = interface_from_dict(trained.to_dict(), wide)
+    core = PairFlockCore(wide, num_envs=1)
+    res = core.reset(seed=[0])
+    u = itf.decode(res.obs[0], np.ones((2, 2))) * wide.pair_accel_limit
+    np.testing.assert_allclose(np.linalg.norm(u, axis=-1), 50.0, rtol=1e-12)
+
+
 def test_interface_encoding_is_bounded_finite_and_symmetric():
     cfg = make_config("paper", n_uavs=30, obs_neighbors=12, pair_accel_limit=50.0)
     itf = make_interface("pair", cfg)

@@ -11,7 +11,12 @@ import math
 import numpy as np
 import pytest
 
-from baselines.quadrotor_invariants import hover_drift, orthonormality_over_scenario, step_response
+from baselines.quadrotor_invariants import (
+    hover_drift,
+    hovering_model,
+    orthonormality_over_scenario,
+    step_response,
+)
 from pairflock_env import PairFlockCore, make_config, parallel_env
 from pairflock_env.dynamics.quadrotor import QuadrotorModel
 from pairflock_env.leader import ClimbAndTurnLeader, make_leader
@@ -29,14 +34,7 @@ G = 9.81
 
 def _model(B=1, N=2, **overrides):
     """A bare model at the preset's rates, every UAV hovering at rest at 20 m altitude."""
-    cfg = make_config("paper-quadrotor", n_uavs=N, **overrides)
-    model = QuadrotorModel(cfg, B)
-    q = np.zeros((B, N, 3))
-    q[..., 0] = 5.0 * np.arange(N)
-    q[..., 2] = 20.0
-    p = np.zeros((B, N, 3))
-    model.reset_rows(np.arange(B), q, p)
-    return cfg, model, q, p
+    return hovering_model(B, N, **overrides)
 
 
 # --------------------------------------------------------------------------- physics

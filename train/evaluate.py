@@ -83,18 +83,9 @@ def run_job(model_path: str, policy: str, n_uavs: int, init: str, seeds: list[in
             for r in rows]  # fmt: skip
 
 
-def _stat(values: list[float], fmt: str) -> str:
-    v = np.asarray(values, dtype=float)
-    finite = v[np.isfinite(v)]
-    if finite.size == 0:
-        return "never"
-    rng = f"{fmt.format(finite.min())}-{fmt.format(finite.max())}"
-    if finite.size < v.size:
-        return f"never in {v.size - finite.size}/{v.size}; others {rng}"
-    return f"{fmt.format(np.median(v))} [{rng}]"
-
-
 def summary_table(rows: list[dict[str, Any]], policies: list[str]) -> str:
+    from baselines.report import stat_cell
+
     header = "| N | init | policy | limit (m/s^2) | " + " | ".join(c[1] for c in COLUMNS) + " |"
     lines = [header, "|" + "---|" * (len(COLUMNS) + 4)]
     keys = sorted({(r["n_uavs"], r["init"]) for r in rows}, key=lambda k: (k[1] != "corners", k[0]))
@@ -103,7 +94,7 @@ def summary_table(rows: list[dict[str, Any]], policies: list[str]) -> str:
             sel = [r for r in rows if r["n_uavs"] == n and r["init"] == init and r["policy"] == pol]
             if not sel:
                 continue
-            cells = [_stat([r[m] for r in sel], f) for m, _, f in COLUMNS]
+            cells = [stat_cell([r[m] for r in sel], f) for m, _, f in COLUMNS]
             lim = f"{sel[0]['pair_accel_limit']:.0f}"
             lines.append(f"| {n} | {init} | {pol} | {lim} | " + " | ".join(cells) + " |")
     return "\n".join(lines)

@@ -12,7 +12,7 @@ import numpy as np
 import dataclasses
 
 from ..config import PairFlockConfig, make_config
-from ..core import PairFlockCore
+from ..core import PairFlockCore, real_array
 from ..learning import LearningInterface, make_interface
 
 __all__ = [
@@ -55,22 +55,7 @@ def build_core_and_interface(
 
 def check_policy_actions(actions: Any, shape: tuple[int, ...], name: str = "actions") -> np.ndarray:
     """Policy actions as float64 of exactly ``shape``; TypeError/ValueError otherwise."""
-    if isinstance(actions, np.ndarray) and actions.dtype.kind in "fiu":
-        a = actions
-    else:
-        try:
-            a = np.asarray(actions)
-        except (TypeError, ValueError):
-            raise TypeError(f"{name} must be a numeric array, got {type(actions).__name__}") from None
-        if a.dtype.kind not in "fiu":
-            raise TypeError(f"{name} have dtype {a.dtype}, expected a real (float or int) dtype")
-    if a.shape != shape:
-        raise ValueError(f"{name} have shape {a.shape}, expected {shape}")
-    a = a.astype(np.float64, copy=False)
-    if not np.isfinite(a).all():
-        bad = np.argwhere(~np.isfinite(a))[0].tolist()
-        raise ValueError(f"{name} contain NaN or inf (first at index {bad}); actions must be finite")
-    return a
+    return real_array(actions, name, shape)
 
 
 @dataclasses.dataclass

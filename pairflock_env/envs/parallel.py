@@ -11,7 +11,7 @@ from pettingzoo import ParallelEnv
 from pettingzoo.utils.conversions import parallel_to_aec
 
 from ..config import PairFlockConfig, make_config
-from ..core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore
+from ..core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore, real_array
 from ..observations import ObsLayout
 from ..render import SwarmRenderer
 
@@ -191,18 +191,7 @@ class PairFlockParallelEnv(ParallelEnv):
         D = self.config.dim
         out = np.empty((1, len(self.possible_agents), D))
         for a, m in self._agent_index.items():
-            act = actions[a]
-            if not isinstance(act, np.ndarray):
-                try:
-                    act = np.asarray(act)
-                except (TypeError, ValueError):
-                    raise TypeError(f"action of {a} must be numeric, got {act!r}") from None
-            if act.dtype.kind not in "fiu":
-                raise TypeError(f"action of {a} has dtype {act.dtype}; expected float or int")
-            if act.shape != (D,):
-                raise ValueError(f"action of {a} has shape {act.shape}; expected ({D},)")
-            if not np.all(np.isfinite(act)):
-                raise ValueError(f"action of {a} contains NaN or inf: {act.tolist()}")
+            act = real_array(actions[a], f"action of {a}", (D,))
             out[0, m] = act
         return out
 
