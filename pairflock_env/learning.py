@@ -49,6 +49,7 @@ and by the loader, so training and evaluation cannot drift apart):
     *Reward* (per UAV, every term <= 0):
 
         r = - w_error * log(1 + |e| / error_scale) - w_progress * |e| / position_scale
+            - w_band * [|e| > band]
             - w_effort * ||a||^2 / dim
             - w_separation * max(0, safe_distance - s) / safe_distance
             - w_collision * [sep < collision_distance]
@@ -56,7 +57,8 @@ and by the loader, so training and evaluation cannot drift apart):
 
     The logarithm keeps the transient (|e| ~ 250 m) and the last centimetres (|e| ~ 0.01 m)
     in the same few units, so the network is paid for precision; the linear term pays for
-    closing the large initial distance quickly; ``sep`` is the distance to the nearest
+    closing the large initial distance quickly; the band term (off by default) pays for
+    entering the |e| <= band zone early instead of creeping into it; ``sep`` is the distance to the nearest
     non-partner UAV and ``s`` the smaller of ``sep`` and the closest approach to an observed
     neighbour within ``approach_horizon`` at constant velocities, so that a collision course
     costs before the UAVs are close (at 50 m/s a close pass lasts a few hundredths of a
@@ -276,6 +278,10 @@ class PairFrameParams:
     """m: accuracy scale of the reward's log(1 + |e| / error_scale)."""
     w_error: float = 0.1
     w_progress: float = 0.1
+    w_band: float = 0.0
+    band: float = 0.5
+    """m: the band term costs w_band per control step while |e| > band (the reproduction's
+    "into the 0.5 m band" time)."""
     w_effort: float = 0.05
     w_separation: float = 5.0
     safe_distance: float = 2.0
@@ -479,6 +485,7 @@ class PairFrameInterface(LearningInterface):
             sep = np.minimum(sep, miss.min(axis=-1))
         a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
         r = -p.w_error * np.log1p(err / p.error_scale) - p.w_progress * err / p.position_scale
+        r -= p.w_band * (err > p.band)
         r -= p.w_effort * np.einsum("...k,...k->...", a, a) / cfg.dim
         r -= p.w_separation * np.maximum(0.0, p.safe_distance - sep) / p.safe_distance
         r -= p.w_collision * (sep < cfg.collision_distance)
