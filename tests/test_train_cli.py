@@ -247,3 +247,19 @@ def test_resume_refuses_changes_and_out_is_protected(tmp_path, capsys):
             main(argv)
         err = capsys.readouterr().err
         assert e.value.code == 2 and message in err, err
+
+
+def test_throughput_script_trains_on_both_routes(tmp_path):
+    """Both routes of ``python -m train.throughput`` build, seed and train (SB3 seeds the env
+    in its constructor, which SuperSuit's ConcatVecEnv no longer supports on its own)."""
+    pytest.importorskip("supersuit")
+    from train.throughput import main
+
+    out = tmp_path / "throughput.json"
+    assert main(["--steps", "64", "--env-steps", "64", "--repeats", "1", "--num-swarms", "2",
+                 "--n-uavs", "6", "--hp", "n_steps=16", "--hp", "batch_size=32",
+                 "--out", str(out)]) == 0  # fmt: skip
+    rec = json.loads(out.read_text())
+    for route in ("native", "supersuit"):
+        assert all(v > 0 for v in rec["median"][route].values()), route
+    assert rec["rows"] == 4 and rec["ratio"]["learn"] > 0

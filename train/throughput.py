@@ -42,7 +42,18 @@ def make_route(route: str, num_swarms: int, overrides: dict[str, Any], seed: int
         from pairflock_env import parallel_env
 
         v = ss.pettingzoo_env_to_vec_env_v1(parallel_env(seed=seed, **overrides))
-        return ss.concat_vec_envs_v1(v, num_swarms, num_cpus=0, base_class="stable_baselines3")
+        venv = ss.concat_vec_envs_v1(v, num_swarms, num_cpus=0, base_class="stable_baselines3")
+        inner = venv.venv
+        if not hasattr(inner, "seed"):
+            # SuperSuit 3.9+ dropped ConcatVecEnv.seed, which SB3's model constructor calls
+            # (AttributeError: 'ConcatVecEnv' object has no attribute 'seed'). The usual
+            # workaround: seed through the next reset instead.
+            def _seed(s: int | None = None) -> list[int | None]:
+                inner.reset(seed=s)
+                return [s] * inner.num_envs
+
+            inner.seed = _seed
+        return venv
     raise ValueError(f"route={route!r} is invalid: must be one of {ROUTES}")
 
 
