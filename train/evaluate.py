@@ -110,7 +110,7 @@ def acceptance(rows: list[dict[str, Any]], n_uavs: int = 20, init: str = "corner
     s = np.array([r["min_pair_separation"] for r in sel])
     band_ok = bool(np.all(np.isfinite(b)) and np.all(b <= 6.0))
     return [
-        (f"N={n_uavs} {init}: median steady-state |error| <= 0.05 m", bool(np.median(e) <= 0.05),
+        (f"N={n_uavs} {init}: median steady-state abs error <= 0.05 m", bool(np.median(e) <= 0.05),
          f"{np.median(e):.4f} m"),
         (f"N={n_uavs} {init}: no seed above 0.1 m", bool(np.all(e <= 0.1)), f"max {e.max():.4f} m"),
         (f"N={n_uavs} {init}: 0.5 m band within 6 s on every seed", band_ok,
