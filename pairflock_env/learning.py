@@ -52,17 +52,18 @@ and by the loader, so training and evaluation cannot drift apart):
             - w_band * [|e| > band]
             - w_effort * ||a||^2 / dim
             - w_separation * max(0, safe_distance - s) / safe_distance
-            - w_collision * [sep < collision_distance]
-            - w_cohesion * max(0, sep - cohesion_distance) / position_scale
+            - w_collision * [s < collision_distance]
+            - w_cohesion * max(0, s - cohesion_distance) / position_scale
 
     The logarithm keeps the transient (|e| ~ 250 m) and the last centimetres (|e| ~ 0.01 m)
     in the same few units, so the network is paid for precision; the linear term pays for
     closing the large initial distance quickly; the band term (off by default) pays for
-    entering the |e| <= band zone early instead of creeping into it; ``sep`` is the distance to the nearest
-    non-partner UAV and ``s`` the smaller of ``sep`` and the closest approach to an observed
-    neighbour within ``approach_horizon`` at constant velocities, so that a collision course
-    costs before the UAVs are close (at 50 m/s a close pass lasts a few hundredths of a
-    second; its warning lasts half a second). The cohesion term keeps the pair in the flock:
+    entering the |e| <= band zone early instead of creeping into it. ``s`` is the smaller of
+    the distance to the nearest non-partner UAV (``min_separation``) and the closest approach
+    to an observed neighbour within ``approach_horizon`` at constant velocities, so that a
+    collision course costs before the UAVs are close (at 50 m/s a close pass lasts a few
+    hundredths of a second, its warning half a second; a predicted collision is charged as
+    one). The cohesion term keeps the pair in the flock:
     nothing in the pair task itself stops both members from fleeing the swarm together, an
     escape route from the separation penalty that an early policy found. A diverged swarm
     gets the core's ``-DIVERGENCE_PENALTY``.

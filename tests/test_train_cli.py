@@ -220,6 +220,8 @@ def test_ctrl_c_saves_a_checkpoint_and_exits_cleanly(tmp_path):
         (["--frame-param", "w_error=-1"], "w_error=-1"),
         (["--eval-baselines", "smcc"], "eval_baselines entry 'smcc'"),
         (["--hp", "seed=3"], "set by the CLI"),
+        (["--hp", "learning_rate=lin_x"], "learning_rate='lin_x' is invalid"),
+        (["--hp", "clip_range=lin_-0.2"], "the start must be > 0"),
     ],
 )
 def test_bad_settings_are_named(tmp_path, capsys, args, message):
@@ -263,3 +265,11 @@ def test_throughput_script_trains_on_both_routes(tmp_path):
     for route in ("native", "supersuit"):
         assert all(v > 0 for v in rec["median"][route].values()), route
     assert rec["rows"] == 4 and rec["ratio"]["learn"] > 0
+
+
+def test_linear_schedules_decay_to_zero():
+    from train.run import resolve_schedules
+
+    hp = resolve_schedules({"learning_rate": "lin_3e-4", "clip_range": 0.2, "n_steps": 8})
+    assert hp["learning_rate"](1.0) == 3e-4 and hp["learning_rate"](0.0) == 0.0
+    assert hp["learning_rate"](0.5) == pytest.approx(1.5e-4) and hp["clip_range"] == 0.2
