@@ -167,3 +167,15 @@ def test_sb3_loader_in_the_action_slot(tmp_path):
         make_pair_policy(f"sb3:{plain}", cfg)
     with pytest.raises(ValueError, match="observes shape"):
         make_pair_policy(f"sb3:{path}", make_config("paper", dim=3, n_uavs=12))
+
+
+def test_committed_policy_keeps_its_budget_in_the_paper_env():
+    """models/pair_n20_a50.zip (the README's policy) loads, flies the paper preset whose env
+    limit is 1000 m/s^2 and stays within the 50 m/s^2 it was trained for, and closes the pair."""
+    from pathlib import Path
+
+    model = Path(__file__).resolve().parents[1] / "models" / "pair_n20_a50.zip"
+    cfg = make_config("paper", n_uavs=20, obs_neighbors=12, horizon=8.0)
+    tr = rollout(cfg, make_pair_policy(f"sb3:{model}", cfg), [10000])
+    assert np.linalg.norm(tr.u, axis=-1).max() <= 50.0 * (1 + 1e-6)  # float32 actions
+    assert np.abs(tr.pair_error[0, :, -1]).max() < 0.5
