@@ -134,18 +134,23 @@ def surface_panels_figure(
     title: str,
     *,
     ncols: int = 3,
+    linthresh: float = 10.0,
+    sharey: bool = False,
 ) -> Figure:
-    """Sliding surface s(t) (Figs. 6, 13): panel title -> line label -> (t, s); symlog axis
-    (s starts near 1e5 m^2/s and chatters around 0)."""
+    """Sliding surface s(t) (Figs. 6, 13, 17): panel title -> line label -> (t, s); symlog
+    axis, linear within +-``linthresh`` (s starts near 1e5 m^2/s and chatters around 0);
+    ``sharey`` gives every panel the same scale."""
     rows, cols = _grid(len(panels), ncols)
     fig = Figure(figsize=(5.6 * cols, 3.6 * rows + 0.5))
+    first = None
     for i, (ptitle, series) in enumerate(panels.items()):
-        ax = fig.add_subplot(rows, cols, i + 1)
+        ax = fig.add_subplot(rows, cols, i + 1, sharey=first if sharey else None)
+        first = first or ax
         for c, (label, (t, s)) in enumerate(series.items()):
             m = t <= t_max
             ax.plot(t[m], s[m], lw=0.8, alpha=0.8, label=label,
                     color=PAIR_COLORS[c % len(PAIR_COLORS)])
-        ax.set_yscale("symlog", linthresh=10.0)
+        ax.set_yscale("symlog", linthresh=linthresh)
         ax.axhline(0.0, color="k", lw=0.6)
         ax.set_xlabel("time (s)")
         ax.set_ylabel("s (m$^2$/s)")
@@ -268,30 +273,43 @@ def trajectories_3d_figure(
     leader_positions: np.ndarray,
     pairs,
     title: str,
+    *,
+    t: np.ndarray | None = None,
+    marks: Sequence[float] = (),
 ) -> Figure:
-    """3-D trajectories (Fig. 16): every UAV in grey, the pairs in colour, the leader dashed;
-    a dot marks each start and a triangle each end."""
+    """3-D trajectories (Fig. 16): every other UAV in grey, the pairs in colour, the leader
+    dashed with a star at its end. Without ``marks`` a dot marks each start and a triangle
+    each end; with ``marks`` (times, needs the sample times ``t``) the whole swarm is dotted
+    at the samples nearest to those times, labelled next to the leader."""
     positions = np.asarray(positions, dtype=float)
     if positions.ndim != 3 or positions.shape[-1] != 3:
         raise ValueError(f"positions has shape {positions.shape}; expected (T, N, 3) (dim = 3)")
+    if len(marks) and t is None:
+        raise ValueError("marks need the sample times t")
     fig = Figure(figsize=(6.4, 5.6))
     ax = fig.add_subplot(1, 1, 1, projection="3d")
     paired = {i: k for k, pr in enumerate(pairs) for i in pr}
-    for i in range(positions.shape[1]):
+    others = [i for i in range(positions.shape[1]) if i not in paired]
+    for n, i in enumerate(others):
         xyz = positions[:, i]
-        if i in paired:
-            continue
-        ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], lw=0.5, color=UNPAIRED_COLOR, alpha=0.45)
+        ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], lw=0.5, color=UNPAIRED_COLOR, alpha=0.45,
+                label="other UAVs" if n == 0 else None)  # fmt: skip
     for i, k in sorted(paired.items()):
         xyz = positions[:, i]
         color = PAIR_COLORS[k % len(PAIR_COLORS)]
         first = i == pairs[k][0]
         label = f"pair {k} (UAVs {pairs[k][0]}, {pairs[k][1]})" if first else None
         ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], lw=1.4, color=color, label=label)
-    ends = positions[-1]
-    ax.scatter(*positions[0].T, s=6, color="0.3", depthshade=False)
-    ax.scatter(*ends.T, s=14, marker="^", color="0.1", depthshade=False)
     lq = np.asarray(leader_positions, dtype=float)
+    if len(marks):
+        t = np.asarray(t, dtype=float)
+        for tm in marks:
+            k = int(np.argmin(np.abs(t - tm)))
+            ax.scatter(*positions[k].T, s=7, color="k", depthshade=False)
+            ax.text(*(lq[k] + np.array([0.0, 0.0, 3.0])), f"{t[k]:.0f} s", fontsize=7)
+    else:
+        ax.scatter(*positions[0].T, s=6, color="0.3", depthshade=False)
+        ax.scatter(*positions[-1].T, s=14, marker="^", color="0.1", depthshade=False)
     ax.plot(lq[:, 0], lq[:, 1], lq[:, 2], "k--", lw=1.2, label="virtual leader")
     ax.scatter(*lq[-1], marker="*", s=160, color="gold", edgecolor="k", depthshade=False)
     ax.set_xlabel("x (m)")

@@ -295,7 +295,7 @@ def check_criteria(rows: Sequence[dict[str, Any]]) -> list[tuple[str, bool, str]
 # --------------------------------------------------------------------------- figures
 def _figures(jobs: dict[tuple[str, str], dict[str, Any]], out: Path, dpi: int) -> list[Path]:
     from . import quadrotor_figures as qf
-    from .figures import save_figure
+    from .figures import save_figure, surface_panels_figure, trajectories_3d_figure
 
     paths: list[Path] = []
     main_key = ("quadrotor", "smc") if ("quadrotor", "smc") in jobs else next(iter(jobs))
@@ -309,14 +309,17 @@ def _figures(jobs: dict[tuple[str, str], dict[str, Any]], out: Path, dpi: int) -
                                   f"10 quadrotors, sliding mode: positions and headings "
                                   f"(seed {seed})")  # fmt: skip
         paths.append(save_figure(fig, out / "snapshots.png", dpi=dpi))
-        fig = qf.trajectories_figure(j["t"], j["positions"], j["leader_positions"], cfg.pairs,
+        fig = trajectories_3d_figure(j["positions"], j["leader_positions"], cfg.pairs,
                                      f"3-D trajectories, {main_key[0]}, sliding mode "
-                                     f"(seed {seed})")  # fmt: skip
+                                     f"(seed {seed})", t=j["t"],
+                                     marks=(0.0, 20.0, 35.0, 50.0))  # fmt: skip
         paths.append(save_figure(fig, out / "trajectories_3d.png", dpi=dpi))
     surf = {f"{dyn}, {pol}": (v["t"], v["surface"][0]) for (dyn, pol), v in jobs.items()
             if pol == "smc"}  # fmt: skip
     if surf:
-        fig = qf.surface_figure(surf, f"Sliding surface s(t), sliding mode (seed {seed})")
+        fig = surface_panels_figure({k: {k: v} for k, v in surf.items()}, np.inf,
+                                    f"Sliding surface s(t), sliding mode (seed {seed})",
+                                    ncols=1, linthresh=1.0, sharey=True)  # fmt: skip
         paths.append(save_figure(fig, out / "sliding_surface.png", dpi=dpi))
     curves = {(dyn, pol): (v["t"], v["pair_error"][0]) for (dyn, pol), v in jobs.items()}
     fig = qf.pair_error_figure(curves, STRAIGHT_WINDOWS, CRITERIA["band"],

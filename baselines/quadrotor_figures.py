@@ -1,6 +1,7 @@
 """Figures of the quadrotor experiment in the style of Figs. 15-20 (headless, Agg canvas).
 
 Each function returns a matplotlib ``Figure``; ``baselines.figures.save_figure`` writes it.
+The 3-D trajectories and the sliding surface use ``baselines.figures`` as the benchmark does.
 Swarm snapshots reuse ``pairflock_env.render.draw_swarm`` (triangles along the heading, the
 pair circled with radius d_m, the leader as a star).
 """
@@ -13,12 +14,10 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from pairflock_env.math3d import euler_zyx
-from pairflock_env.render import PAIR_COLORS, UNPAIRED_COLOR, draw_swarm
+from pairflock_env.render import draw_swarm
 
 __all__ = [
     "snapshots_figure",
-    "trajectories_figure",
-    "surface_figure",
     "pair_error_figure",
     "euler_figure",
 ]
@@ -58,63 +57,6 @@ def snapshots_figure(t, positions, velocities, leader_positions, pairs, d_m,
         ax.tick_params(labelsize=7)
         ax.xaxis.label.set_size(8)
         ax.yaxis.label.set_size(8)
-    fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
-    return fig
-
-
-def trajectories_figure(t, positions, leader_positions, pairs, title: str,
-                        marks: Sequence[float] = (0.0, 20.0, 35.0, 50.0)) -> Figure:  # fmt: skip
-    """3-D trajectories (Fig. 16): unpaired UAVs grey, the pair in colour, the leader dashed;
-    the swarm's positions are dotted at the ``marks`` times."""
-    positions = np.asarray(positions, dtype=float)
-    fig = Figure(figsize=(7.4, 6.0))
-    ax = fig.add_subplot(1, 1, 1, projection="3d")
-    paired = {i: k for k, pr in enumerate(pairs) for i in pr}
-    for i in range(positions.shape[1]):
-        xyz = positions[:, i]
-        if i in paired:
-            k = paired[i]
-            ax.plot(*xyz.T, lw=1.1, color=PAIR_COLORS[k % len(PAIR_COLORS)],
-                    label=f"paired UAVs {pairs[k][0] + 1}, {pairs[k][1] + 1}"
-                    if i == pairs[k][0] else None)  # fmt: skip
-        else:
-            ax.plot(*xyz.T, lw=0.6, color=UNPAIRED_COLOR, alpha=0.6,
-                    label="other UAVs" if i == min(set(range(positions.shape[1])) - set(paired))
-                    else None)  # fmt: skip
-    lq = np.asarray(leader_positions, dtype=float)
-    ax.plot(*lq.T, "k--", lw=1.0, label="virtual leader")
-    for tm in marks:
-        k = _nearest(t, tm)
-        ax.scatter(*positions[k].T, s=7, color="k", depthshade=False)
-        ax.text(*(lq[k] + np.array([0.0, 0.0, 3.0])), f"{t[k]:.0f} s", fontsize=7)
-    ax.scatter(*lq[-1], marker="*", s=120, color="gold", edgecolor="k", depthshade=False)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
-    ax.set_zlabel("z (m)")
-    ax.set_title(title, fontsize=10)
-    ax.legend(fontsize=8, loc="upper left")
-    ax.view_init(elev=25, azim=-60)
-    fig.tight_layout()
-    return fig
-
-
-def surface_figure(series: Mapping[str, tuple[np.ndarray, np.ndarray]], title: str) -> Figure:
-    """Sliding surface s(t) (Fig. 17): one panel per label (symlog axis, shared scale), since
-    the chattering of sign(s) makes overlaid curves unreadable."""
-    n = len(series)
-    fig = Figure(figsize=(7.0, 2.4 * n + 0.6))
-    axes = []
-    for i, (label, (t, s)) in enumerate(series.items()):
-        ax = fig.add_subplot(n, 1, i + 1, sharey=axes[0] if axes else None)
-        axes.append(ax)
-        ax.plot(t, s, lw=0.6, color=PAIR_COLORS[i % len(PAIR_COLORS)])
-        ax.set_yscale("symlog", linthresh=1.0)
-        ax.axhline(0.0, color="k", lw=0.6)
-        ax.set_ylabel("s (m$^2$/s)")
-        ax.set_title(label, fontsize=9)
-        ax.grid(True, lw=0.3)
-    axes[-1].set_xlabel("time (s)")
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     return fig

@@ -29,3 +29,12 @@ def median_rate(fn: Callable[[], object], work: float, repeats: int, min_time: f
             fn()
         rates.append(work * n / (time.perf_counter() - t0))
     return statistics.median(rates)
+
+
+def print_breakdown(title: str, parts: dict[str, float], share_of: str = "share") -> None:
+    """A markdown table of ``parts`` (microseconds; ``"total core.step"`` is 100 %)."""
+    print(f"\n## {title} (microseconds per control step)\n")
+    print(f"| part | us | {share_of} |\n|---|---|---|")
+    total = parts["total core.step"]
+    for k, v in parts.items():
+        print(f"| {k} | {v:,.1f} | {100 * v / total:.0f} % |")

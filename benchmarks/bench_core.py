@@ -20,7 +20,7 @@ import argparse  # noqa: E402
 import platform  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _timing import median_rate  # noqa: E402
+from _timing import median_rate, print_breakdown  # noqa: E402
 
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
 from pairflock_env.flocking import flocking_pass, pair_pass  # noqa: E402
@@ -101,12 +101,7 @@ def main(argv=None) -> int:
         r = bench_pettingzoo(N, repeats, min_time)
         print(f"| {N} | {r:,.0f} | {r * N:,.0f} |")
     for N, B in ((100, 256), (100, 1)):
-        print(f"\n## Where the time goes: N = {N}, B = {B} (microseconds per control step)\n")
-        print("| part | us | share |\n|---|---|---|")
-        parts = breakdown(N, B, repeats)
-        total = parts["total core.step"]
-        for k, v in parts.items():
-            print(f"| {k} | {v:,.1f} | {100 * v / total:.0f} % |")
+        print_breakdown(f"Where the time goes: N = {N}, B = {B}", breakdown(N, B, repeats))
     return 0
 
 

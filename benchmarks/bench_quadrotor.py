@@ -22,7 +22,7 @@ import argparse  # noqa: E402
 import platform  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _timing import median_rate  # noqa: E402
+from _timing import median_rate, print_breakdown  # noqa: E402
 
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
 from pairflock_env.dynamics.quadrotor import QuadrotorModel  # noqa: E402
@@ -162,12 +162,8 @@ def main(argv=None) -> int:
         mark = f" (target >= {TARGET_B64:g}: {'met' if rq >= TARGET_B64 else 'NOT met'})" if B == 64 else ""
         print(f"| {B} | {rq:,.0f}{mark} | {rp:,.0f} |")
     for B in (1, 64):
-        print(f"\n## Where the time goes, B = {B} (microseconds per control step)\n")
-        print("| part | us | share of core.step |\n|---|---|---|")
-        parts = breakdown(B, repeats, min_time)
-        total = parts["total core.step"]
-        for k, v in parts.items():
-            print(f"| {k} | {v:,.1f} | {100 * v / total:.0f} % |")
+        print_breakdown(f"Where the time goes, B = {B}", breakdown(B, repeats, min_time),
+                        "share of core.step")  # fmt: skip
     return 0
 
 
