@@ -36,7 +36,7 @@ from typing import Any
 
 from .sweep import BACKENDS, pin_threads
 
-__all__ = ["main", "build_parser", "SUITES", "Suite"]
+__all__ = ["SUITES", "Suite", "build_parser", "main"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -108,17 +108,25 @@ SHORTCUTS = (
     ("--n-uavs", "n_uavs", int, "swarm sizes N"),
     ("--dim", "dim", int, "spatial dimension (2 or 3)"),
     ("--d-m", "d_m", float, "desired pair distance d_m (m)"),
-    ("--pairs", "pairs", int, "number of pairs K: UAVs (0, 1), (2, 3), ... (K > 2^(dim-1) "
-                              "needs --set init=random)"),
+    (
+        "--pairs",
+        "pairs",
+        int,
+        "number of pairs K: UAVs (0, 1), (2, 3), ... (K > 2^(dim-1) needs --set init=random)",
+    ),
     ("--dynamics", "dynamics", str, "vehicle model (see PairFlockConfig.dynamics)"),
     ("--dt", "dt", float, "control period (s)"),
     ("--horizon", "horizon", float, "episode length (s)"),
     ("--noise-position", "obs_noise_position", float, "std of the noise on the observed y (m)"),
     ("--noise-velocity", "obs_noise_velocity", float, "std of the noise on the observed y' (m/s)"),
     ("--delay", "partner_delay", int, "delay of the partner's state (control steps)"),
-    ("--disturbance", "disturbance_std", float,
-     "std of a random acceleration on every UAV (m/s^2)"),
-)  # fmt: skip
+    (
+        "--disturbance",
+        "disturbance_std",
+        float,
+        "std of a random acceleration on every UAV (m/s^2)",
+    ),
+)
 
 
 def _epilog() -> str:
@@ -142,57 +150,125 @@ def build_parser(prog: str = "python -m baselines.benchmark") -> argparse.Argume
         epilog=_epilog(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--suite", default="paper", choices=list(SUITES),
-                   help="named defaults (default: paper)")
+    p.add_argument(
+        "--suite", default="paper", choices=list(SUITES), help="named defaults (default: paper)"
+    )
     p.add_argument("--preset", default=None, help="config preset (default: the suite's)")
-    p.add_argument("-p", "--policies", nargs="+", default=None, metavar="SPEC",
-                   help="policy specs (default: the suite's)")
+    p.add_argument(
+        "-p",
+        "--policies",
+        nargs="+",
+        default=None,
+        metavar="SPEC",
+        help="policy specs (default: the suite's)",
+    )
     sweep = p.add_argument_group("scenarios (each option with several values is a sweep axis)")
     for opt, field, typ, text in SHORTCUTS:
-        sweep.add_argument(opt, nargs="+", type=typ, default=None, metavar="V",
-                           help=f"{text} [{field}]")
-    sweep.add_argument("--set", action="append", default=[], metavar="KEY=V1,V2",
-                       help="sweep any config field (repeatable)")
-    sweep.add_argument("--scenario", action="append", default=None, metavar="[LABEL:]K=V,...",
-                       help="a named scenario (repeatable; replaces the suite's list)")
+        sweep.add_argument(
+            opt, nargs="+", type=typ, default=None, metavar="V", help=f"{text} [{field}]"
+        )
+    sweep.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=V1,V2",
+        help="sweep any config field (repeatable)",
+    )
+    sweep.add_argument(
+        "--scenario",
+        action="append",
+        default=None,
+        metavar="[LABEL:]K=V,...",
+        help="a named scenario (repeatable; replaces the suite's list)",
+    )
     sd = p.add_argument_group("seeds and metrics")
     sd.add_argument("--seeds", type=int, default=None, help="seeds per (scenario, policy)")
-    sd.add_argument("--first-seed", type=int, default=0,
-                    help="seeds are first-seed, first-seed + 1, ... (default: 0)")
-    sd.add_argument("--steady-window", type=float, default=None,
-                    help="steady state = the last this many seconds (default: metrics' 10 s)")
+    sd.add_argument(
+        "--first-seed",
+        type=int,
+        default=0,
+        help="seeds are first-seed, first-seed + 1, ... (default: 0)",
+    )
+    sd.add_argument(
+        "--steady-window",
+        type=float,
+        default=None,
+        help="steady state = the last this many seconds (default: metrics' 10 s)",
+    )
     ex = p.add_argument_group("execution")
-    ex.add_argument("--backend", choices=BACKENDS, default="local",
-                    help="local processes or a Ray cluster (pip install 'pairflock-env[ray]')")
-    ex.add_argument("--workers", type=int, default=os.cpu_count() or 1,
-                    help="local processes, or CPUs of a Ray instance started here "
-                         "(default: all cores)")  # fmt: skip
-    ex.add_argument("--ray-address", default=None,
-                    help="Ray cluster to join, e.g. 'auto' (default: start a local one)")
-    ex.add_argument("--batch-size", type=int, default=None,
-                    help="seeds per job (default: all seeds of a (scenario, policy) in one "
-                         "batched core); smaller spreads a sweep over more workers")  # fmt: skip
+    ex.add_argument(
+        "--backend",
+        choices=BACKENDS,
+        default="local",
+        help="local processes or a Ray cluster (pip install 'pairflock-env[ray]')",
+    )
+    ex.add_argument(
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="local processes, or CPUs of a Ray instance started here (default: all cores)",
+    )
+    ex.add_argument(
+        "--ray-address",
+        default=None,
+        help="Ray cluster to join, e.g. 'auto' (default: start a local one)",
+    )
+    ex.add_argument(
+        "--batch-size",
+        type=int,
+        default=None,
+        help="seeds per job (default: all seeds of a (scenario, policy) in one "
+        "batched core); smaller spreads a sweep over more workers",
+    )
     out = p.add_argument_group("output")
-    out.add_argument("--out", type=Path, default=None,
-                     help="output folder (default: results/benchmark/<suite>)")
+    out.add_argument(
+        "--out", type=Path, default=None, help="output folder (default: results/benchmark/<suite>)"
+    )
     out.add_argument("--no-figures", action="store_true", help="no PNGs and no traces.npz")
     out.add_argument("--no-snapshots", action="store_true", help="no swarm snapshot PNGs")
-    out.add_argument("--frame-dt", type=float, default=0.05,
-                     help="time between recorded frames for snapshots and video (s)")
-    out.add_argument("--video", nargs="?", const="auto", default=None, metavar="PATH",
-                     help="write an episode video (.mp4 or .gif; default "
-                          "<out>/episode_<scenario>_<policy>_seed<k>.mp4)")  # fmt: skip
-    out.add_argument("--video-policy", default=None, metavar="SPEC",
-                     help="policy of the video (default: the first)")
-    out.add_argument("--video-scenario", default=None, metavar="LABEL",
-                     help="scenario of the video (default: the first)")
+    out.add_argument(
+        "--frame-dt",
+        type=float,
+        default=0.05,
+        help="time between recorded frames for snapshots and video (s)",
+    )
+    out.add_argument(
+        "--video",
+        nargs="?",
+        const="auto",
+        default=None,
+        metavar="PATH",
+        help="write an episode video (.mp4 or .gif; default "
+        "<out>/episode_<scenario>_<policy>_seed<k>.mp4)",
+    )
+    out.add_argument(
+        "--video-policy",
+        default=None,
+        metavar="SPEC",
+        help="policy of the video (default: the first)",
+    )
+    out.add_argument(
+        "--video-scenario",
+        default=None,
+        metavar="LABEL",
+        help="scenario of the video (default: the first)",
+    )
     out.add_argument("--video-fps", type=int, default=25, help="video frames per second")
-    out.add_argument("--video-speed", type=float, default=5.0,
-                     help="simulated seconds per video second")
-    out.add_argument("--check", action="store_true",
-                     help="paper preset: exit with status 1 if an acceptance check fails")
-    out.add_argument("--replot", type=Path, default=None, metavar="DIR",
-                     help="only redraw the figures of a finished run in DIR")
+    out.add_argument(
+        "--video-speed", type=float, default=5.0, help="simulated seconds per video second"
+    )
+    out.add_argument(
+        "--check",
+        action="store_true",
+        help="paper preset: exit with status 1 if an acceptance check fails",
+    )
+    out.add_argument(
+        "--replot",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="only redraw the figures of a finished run in DIR",
+    )
     out.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
 
@@ -224,8 +300,9 @@ def _grid(args: argparse.Namespace, suite: Suite, parser) -> dict[str, list[Any]
         grid[key] = [parse_value(v) for v in split_top_level(rhs)]
         given[key] = "--set"
     if "pairs" in grid:
-        grid["pairs"] = [tuple(tuple(p) for p in v) if isinstance(v, list) else v
-                         for v in grid["pairs"]]  # fmt: skip
+        grid["pairs"] = [
+            tuple(tuple(p) for p in v) if isinstance(v, list) else v for v in grid["pairs"]
+        ]
     return grid
 
 
@@ -242,8 +319,9 @@ def _resolve(args: argparse.Namespace, parser):
         extra = ""
         if args.preset is None:
             extra = f" (suite {args.suite!r} needs it; it is not available in this install)"
-        parser.error(f"--preset {preset!r} is invalid{extra}: valid presets are "
-                     f"{', '.join(preset_names())}")  # fmt: skip
+        parser.error(
+            f"--preset {preset!r} is invalid{extra}: valid presets are {', '.join(preset_names())}"
+        )
     try:
         specs = [parse_policy(s) for s in (args.policies or suite.policies)]
     except ValueError as e:
@@ -259,8 +337,11 @@ def _resolve(args: argparse.Namespace, parser):
     seeds = list(range(args.first_seed, args.first_seed + n_seeds))
     grid = _grid(args, suite, parser)
     try:
-        listed = ([parse_scenario(s) for s in args.scenario] if args.scenario is not None
-                  else [(lab, dict(ov)) for lab, ov in suite.scenarios])  # fmt: skip
+        listed = (
+            [parse_scenario(s) for s in args.scenario]
+            if args.scenario is not None
+            else [(lab, dict(ov)) for lab, ov in suite.scenarios]
+        )
         scenarios = expand_scenarios(dict(suite.base), listed, grid)
     except ValueError as e:
         parser.error(str(e))
@@ -272,7 +353,7 @@ def _resolve(args: argparse.Namespace, parser):
             parser.error(f"scenario {sc.label!r}: {e}")
     reprs = {}
     for spec in specs:  # build every policy once per scenario: bad gains fail here, not later
-        for sc, cfg in zip(scenarios, configs):
+        for sc, cfg in zip(scenarios, configs, strict=False):
             try:
                 reprs[spec.label] = repr(spec.build(cfg))
             except (ValueError, TypeError, KeyError, FileNotFoundError) as e:
@@ -280,8 +361,11 @@ def _resolve(args: argparse.Namespace, parser):
     # the tables lead with the sweep axes when the scenarios are a plain grid ("| N | ...")
     # (the suite's own axes, and any other axis with several values)
     axes = [k for k, v in grid.items() if k in dict(suite.grid) or len(v) > 1]
-    keys = (tuple((SHORT_NAMES.get(k, k), "n_pairs" if k == "pairs" else k) for k in axes)
-            if axes and not listed else report.SCENARIO_KEYS)  # fmt: skip
+    keys = (
+        tuple((SHORT_NAMES.get(k, k), "n_pairs" if k == "pairs" else k) for k in axes)
+        if axes and not listed
+        else report.SCENARIO_KEYS
+    )
     return suite, preset, specs, scenarios, configs, seeds, reprs, keys
 
 
@@ -310,15 +394,18 @@ def _video_target(args, specs, scenarios, parser) -> tuple[int, int] | None:
     j = 0
     if args.video_policy is not None:
         if args.video_policy not in labels:
-            parser.error(f"--video-policy {args.video_policy!r} is invalid: must be one of "
-                         f"the policies {labels}")  # fmt: skip
+            parser.error(
+                f"--video-policy {args.video_policy!r} is invalid: must be one of "
+                f"the policies {labels}"
+            )
         j = labels.index(args.video_policy)
     slabels = [s.label for s in scenarios]
     i = 0
     if args.video_scenario is not None:
         if args.video_scenario not in slabels:
-            parser.error(f"--video-scenario {args.video_scenario!r} is invalid: must be one "
-                         f"of {slabels}")  # fmt: skip
+            parser.error(
+                f"--video-scenario {args.video_scenario!r} is invalid: must be one of {slabels}"
+            )
         i = slabels.index(args.video_scenario)
     if args.video != "auto" and Path(args.video).suffix.lower() not in (".mp4", ".gif"):
         parser.error(f"--video {args.video!r} is invalid: the file must end in .mp4 or .gif")
@@ -340,8 +427,14 @@ def _replot(args, parser) -> int:
     rows = [{k: (float("nan") if v is None else v) for k, v in r.items()} for r in res["runs"]]
     traces = load_traces(d / "traces.npz") if (d / "traces.npz").exists() else {}
     snapshots = bool(res["snapshots"]) and not args.no_snapshots
-    paths = make_figures(d, rows, traces, res["scenarios"],
-                         [p["label"] for p in res["policies"]], snapshots=snapshots)
+    paths = make_figures(
+        d,
+        rows,
+        traces,
+        res["scenarios"],
+        [p["label"] for p in res["policies"]],
+        snapshots=snapshots,
+    )
     print(f"wrote {len(paths)} figures in {d}")
     return 0
 
@@ -368,8 +461,9 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
 
     suite, preset, specs, scenarios, configs, seeds, reprs, keys = _resolve(args, parser)
     if args.check and preset != "paper":
-        parser.error(f"--check verifies the paper's claims: it needs --preset paper, "
-                     f"not {preset!r}")
+        parser.error(
+            f"--check verifies the paper's claims: it needs --preset paper, not {preset!r}"
+        )
     video = _video_target(args, specs, scenarios, parser)
     out = args.out or Path("results") / "benchmark" / args.suite
 
@@ -385,21 +479,30 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
     snapshots = suite.snapshots and not args.no_snapshots
     metric_kwargs = {} if args.steady_window is None else {"steady_window": args.steady_window}
     jobs = make_jobs(
-        configs, specs, seeds, batch_size=args.batch_size,
+        configs,
+        specs,
+        seeds,
+        batch_size=args.batch_size,
         record=lambda i, j: figures or video == (i, j),
-        record_stride=lambda cfg: max(1, int(round(args.frame_dt / cfg.dt))),
+        record_stride=lambda cfg: max(1, round(args.frame_dt / cfg.dt)),
         metric_kwargs=metric_kwargs,
-    )  # fmt: skip
+    )
     started = _now()
     t0 = time.perf_counter()
     results: dict[tuple[int, int], list[dict[str, Any]]] = {}
     traces: dict[tuple[int, int], dict[str, Any]] = {}
     total = len(seeds) * len(specs) * len(scenarios)
     cpu_s = 0.0  # summed over jobs: a load-independent measure of the work
-    with tqdm(total=total, unit="run", desc=f"benchmark {args.suite}", disable=args.quiet,
-              dynamic_ncols=True) as bar:  # fmt: skip
-        for job, res in run_jobs(jobs, backend=args.backend, workers=args.workers,
-                                 ray_address=args.ray_address):  # fmt: skip
+    with tqdm(
+        total=total,
+        unit="run",
+        desc=f"benchmark {args.suite}",
+        disable=args.quiet,
+        dynamic_ncols=True,
+    ) as bar:
+        for job, res in run_jobs(
+            jobs, backend=args.backend, workers=args.workers, ray_address=args.ray_address
+        ):
             results.setdefault((job.scenario, job.policy), []).extend(res["rows"])
             if "trace" in res:
                 traces[job.scenario, job.policy] = res["trace"]
@@ -410,7 +513,7 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
     # rows in a fixed order: scenario, policy (as given), seed, pair
     columns = _columns(scenarios, configs)
     rows = []
-    for i, (sc, cfg) in enumerate(zip(scenarios, configs)):
+    for i, (sc, cfg) in enumerate(zip(scenarios, configs, strict=False)):
         d = {**cfg.to_dict(), "n_pairs": cfg.n_pairs}
         lead = {"scenario": sc.label, "preset": preset}
         lead.update({k: _cell(d[k]) for k in columns[2:]})
@@ -418,17 +521,30 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
             for m in sorted(results[i, j], key=lambda r: (r["seed"], r["pair"])):
                 rows.append({**lead, "policy": spec.label, **m})
     metric_cols = [k for k in rows[0] if k not in columns and k != "policy"]
-    write_csv(out / "results.csv", rows, columns + ["policy"] + metric_cols)
-    sc_records = [{"label": sc.label, "overrides": dict(sc.overrides), "config": cfg.to_dict()}
-                  for sc, cfg in zip(scenarios, configs)]  # fmt: skip
-    pol_records = [{"label": s.label, "name": s.name, "gains": dict(s.gains),
-                    "resolved": reprs[s.label]} for s in specs]  # fmt: skip
-    atomic_write_text(out / "results.json", report.dumps_stable({
-        "suite": args.suite, "preset": preset, "seeds": seeds, "scenarios": sc_records,
-        "policies": pol_records, "metrics": {k: list(v) for k, v in METRIC_DOCS.items()},
-        "snapshots": snapshots,
-        "runs": report.json_rows(rows),
-    }))  # fmt: skip
+    write_csv(out / "results.csv", rows, [*columns, "policy", *metric_cols])
+    sc_records = [
+        {"label": sc.label, "overrides": dict(sc.overrides), "config": cfg.to_dict()}
+        for sc, cfg in zip(scenarios, configs, strict=False)
+    ]
+    pol_records = [
+        {"label": s.label, "name": s.name, "gains": dict(s.gains), "resolved": reprs[s.label]}
+        for s in specs
+    ]
+    atomic_write_text(
+        out / "results.json",
+        report.dumps_stable(
+            {
+                "suite": args.suite,
+                "preset": preset,
+                "seeds": seeds,
+                "scenarios": sc_records,
+                "policies": pol_records,
+                "metrics": {k: list(v) for k, v in METRIC_DOCS.items()},
+                "snapshots": snapshots,
+                "runs": report.json_rows(rows),
+            }
+        ),
+    )
 
     checks = []
     if (suite.check or args.check) and preset == "paper":
@@ -437,9 +553,13 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
     if figures:
         report.save_traces(out / "traces.npz", traces)
         fig_paths = report.make_figures(
-            out, rows, traces, sc_records, [s.label for s in specs],
+            out,
+            rows,
+            traces,
+            sc_records,
+            [s.label for s in specs],
             snapshots=snapshots,
-        )  # fmt: skip
+        )
     video_path = None
     if video is not None:
         from .specs import slug
@@ -451,38 +571,83 @@ def main(argv: Sequence[str] | None = None, prog: str = "python -m baselines.ben
         name = f"episode_{slug(scenarios[i].label)}_{slug(specs[j].label)}_seed{tr['seed']}.mp4"
         video_path = out / name if args.video == "auto" else Path(args.video)
         write_episode_video(
-            video_path, tr["frame_t"], tr["positions"], tr["velocities"],
-            tr["leader_positions"], cfg.pairs, cfg.d_m, fps=args.video_fps,
-            speed=args.video_speed, pair_error=tr["pair_error"][0], error_t=tr["t"],
+            video_path,
+            tr["frame_t"],
+            tr["positions"],
+            tr["velocities"],
+            tr["leader_positions"],
+            cfg.pairs,
+            cfg.d_m,
+            fps=args.video_fps,
+            speed=args.video_speed,
+            pair_error=tr["pair_error"][0],
+            error_t=tr["t"],
             title=f"{cfg.n_uavs} UAVs, {specs[j].label}, {scenarios[i].label}",
-        )  # fmt: skip
+        )
 
-    md = _summary_markdown(args.suite, preset, specs, scenarios, configs, seeds, rows, checks,
-                           fig_paths, out, metric_kwargs, keys)  # fmt: skip
+    md = _summary_markdown(
+        args.suite,
+        preset,
+        specs,
+        scenarios,
+        configs,
+        seeds,
+        rows,
+        checks,
+        fig_paths,
+        out,
+        metric_kwargs,
+        keys,
+    )
     atomic_write_text(out / "summary.md", md)
     total_s = time.perf_counter() - t0
-    write_json(out / "run.json", run_record(
-        suite=args.suite, preset=preset, seeds=seeds,
-        policies=pol_records, scenarios=sc_records, backend=args.backend,
-        workers=args.workers, batch_size=args.batch_size, ray_address=args.ray_address,
-        metric_options=metric_kwargs,
-        outputs=sorted(str(p.relative_to(out)) for p in
-                       [out / "results.csv", out / "results.json", out / "summary.md",
-                        *fig_paths, *([video_path] if video_path else [])]
-                       if Path(p).is_relative_to(out)),
-        timestamps={"started_utc": started.isoformat(timespec="seconds"),
-                    "finished_utc": _now().isoformat(timespec="seconds")},
-        timing={"simulation_s": round(sim_wall, 2), "total_s": round(total_s, 2),
-                "jobs_cpu_s": round(cpu_s, 2), "jobs": len(jobs), "runs": total},
-    ))  # fmt: skip
+    write_json(
+        out / "run.json",
+        run_record(
+            suite=args.suite,
+            preset=preset,
+            seeds=seeds,
+            policies=pol_records,
+            scenarios=sc_records,
+            backend=args.backend,
+            workers=args.workers,
+            batch_size=args.batch_size,
+            ray_address=args.ray_address,
+            metric_options=metric_kwargs,
+            outputs=sorted(
+                str(p.relative_to(out))
+                for p in [
+                    out / "results.csv",
+                    out / "results.json",
+                    out / "summary.md",
+                    *fig_paths,
+                    *([video_path] if video_path else []),
+                ]
+                if Path(p).is_relative_to(out)
+            ),
+            timestamps={
+                "started_utc": started.isoformat(timespec="seconds"),
+                "finished_utc": _now().isoformat(timespec="seconds"),
+            },
+            timing={
+                "simulation_s": round(sim_wall, 2),
+                "total_s": round(total_s, 2),
+                "jobs_cpu_s": round(cpu_s, 2),
+                "jobs": len(jobs),
+                "runs": total,
+            },
+        ),
+    )
 
     print(report.summary_table(rows, report.ACCURACY_METRICS, keys))
     for c, ok, d in checks:
         print(f"[{'pass' if ok else 'FAIL'}] {c}: {d}")
-    print(f"\nwrote {out}/results.csv, results.json, summary.md, run.json, "
-          f"{len(fig_paths)} figures{', ' + str(video_path) if video_path else ''} in "
-          f"{total_s:.1f} s (simulation {sim_wall:.1f} s wall, {cpu_s:.1f} s CPU in jobs; "
-          f"backend {args.backend}, {args.workers} workers)")  # fmt: skip
+    print(
+        f"\nwrote {out}/results.csv, results.json, summary.md, run.json, "
+        f"{len(fig_paths)} figures{', ' + str(video_path) if video_path else ''} in "
+        f"{total_s:.1f} s (simulation {sim_wall:.1f} s wall, {cpu_s:.1f} s CPU in jobs; "
+        f"backend {args.backend}, {args.workers} workers)"
+    )
     if args.check and not all(ok for _, ok, _ in checks):
         return 1
     return 0
@@ -497,8 +662,20 @@ def _md_escape(text: str) -> str:
     return text.replace("|", "\\|")
 
 
-def _summary_markdown(suite, preset, specs, scenarios, configs, seeds, rows, checks,
-                      fig_paths, out, metric_kwargs, keys) -> str:  # fmt: skip
+def _summary_markdown(
+    suite,
+    preset,
+    specs,
+    scenarios,
+    configs,
+    seeds,
+    rows,
+    checks,
+    fig_paths,
+    out,
+    metric_kwargs,
+    keys,
+) -> str:
     from pairflock_env.metrics import METRIC_DOCS
 
     from . import report
@@ -511,8 +688,9 @@ def _summary_markdown(suite, preset, specs, scenarios, configs, seeds, rows, che
         f"Preset `{preset}`; policies {', '.join(f'`{s.label}`' for s in specs)}; "
         f"{len(seeds)} seeds ({seeds[0]}-{seeds[-1]}) per scenario and policy, the same seeds "
         f"and initial states for every policy; horizon {', '.join(f'{h:g}' for h in horizons)} s"
-        + (f"; steady state = last {window:g} s" if window else "") + ". "
-        "Cells: median [min-max] over runs; \"never in k/n\": k runs never got there.",
+        + (f"; steady state = last {window:g} s" if window else "")
+        + ". "
+        'Cells: median [min-max] over runs; "never in k/n": k runs never got there.',
         "",
         "## Scenarios",
         "",
@@ -522,22 +700,38 @@ def _summary_markdown(suite, preset, specs, scenarios, configs, seeds, rows, che
     for sc in scenarios:
         ov = ", ".join(f"`{k}={v}`" for k, v in sc.overrides) or "none"
         md.append(f"| {sc.label} | {ov} |")
-    steps = {sc.label: cfg.episode_steps for sc, cfg in zip(scenarios, configs)}
+    steps = {sc.label: cfg.episode_steps for sc, cfg in zip(scenarios, configs, strict=False)}
     ended = [r for r in rows if r["steps_run"] < steps[r["scenario"]]]
-    md += ["", "## Convergence and accuracy", "",
-           report.summary_table(rows, report.ACCURACY_METRICS, keys), "",
-           "## Cost and safety", "", report.summary_table(rows, report.COST_METRICS, keys), "",
-           "## By scenario and policy", ""]  # fmt: skip
+    md += [
+        "",
+        "## Convergence and accuracy",
+        "",
+        report.summary_table(rows, report.ACCURACY_METRICS, keys),
+        "",
+        "## Cost and safety",
+        "",
+        report.summary_table(rows, report.COST_METRICS, keys),
+        "",
+        "## By scenario and policy",
+        "",
+    ]
     table_fmt = {m: (h, f) for m, h, f in report.ACCURACY_METRICS + report.COST_METRICS}
     for metric in report.PIVOT_METRICS:
         head, fmt = table_fmt[metric]
         md += [f"{head}:", "", report.pivot_table(rows, metric, fmt, keys), ""]
     if ended:
-        md += [f"{len(ended)} runs ended early (divergence or collision termination); their "
-               "series are frozen at the last state (column `steps_run`).", ""]  # fmt: skip
+        md += [
+            f"{len(ended)} runs ended early (divergence or collision termination); their "
+            "series are frozen at the last state (column `steps_run`).",
+            "",
+        ]
     if checks:
-        md += ["## Acceptance criteria (paper)", "", "| criterion | result | measured |",
-               "|---|---|---|"]  # fmt: skip
+        md += [
+            "## Acceptance criteria (paper)",
+            "",
+            "| criterion | result | measured |",
+            "|---|---|---|",
+        ]
         md += [f"| {c} | {'pass' if ok else 'FAIL'} | {d} |" for c, ok, d in checks]
         md.append("")
     md += ["## Metrics", "", "| column | unit | meaning |", "|---|---|---|"]

@@ -25,15 +25,15 @@ from pairflock_env.render import PAIR_COLORS, UNPAIRED_COLOR, draw_swarm
 from .io import atomic_write_bytes
 
 __all__ = [
+    "POLICY_STYLE",
+    "error_figure",
+    "policy_styles",
     "save_figure",
     "snapshot_figure",
+    "steady_error_figure",
     "surface_figure",
     "surface_panels_figure",
-    "error_figure",
-    "steady_error_figure",
     "trajectories_3d_figure",
-    "policy_styles",
-    "POLICY_STYLE",
 ]
 
 #: the paper's comparison, drawn the same way in every figure
@@ -45,8 +45,15 @@ POLICY_STYLE = {
 #: widest figure (inches) before boxes get narrower instead
 MAX_WIDTH_IN = 14.0
 #: colours for every other policy spec, in order of appearance
-_EXTRA_COLORS = ("tab:green", "tab:purple", "tab:orange", "tab:brown", "tab:pink", "tab:olive",
-                 "tab:cyan")  # fmt: skip
+_EXTRA_COLORS = (
+    "tab:green",
+    "tab:purple",
+    "tab:orange",
+    "tab:brown",
+    "tab:pink",
+    "tab:olive",
+    "tab:cyan",
+)
 
 
 def policy_styles(labels: Sequence[str]) -> dict[str, dict[str, Any]]:
@@ -119,9 +126,16 @@ def snapshot_figure(
         k = int(np.argmin(np.abs(t - ti)))
         ax = fig.add_subplot(rows, cols, i + 1)
         headings = draw_swarm(
-            ax, positions[k], velocities[k], pairs, d_m, leader_positions[k],
-            headings=headings, arrows=(i == n - 1), title=f"t = {round(float(t[k]), 2):g} s",
-        )  # fmt: skip
+            ax,
+            positions[k],
+            velocities[k],
+            pairs,
+            d_m,
+            leader_positions[k],
+            headings=headings,
+            arrows=(i == n - 1),
+            title=f"t = {round(float(t[k]), 2):g} s",
+        )
         if positions.shape[-1] == 3:
             ax.set_title(f"t = {round(float(t[k]), 2):g} s (x-y plane)", fontsize=10)
     _suptitle(fig, title)
@@ -148,8 +162,9 @@ def surface_panels_figure(
         first = first or ax
         for c, (label, (t, s)) in enumerate(series.items()):
             m = t <= t_max
-            ax.plot(t[m], s[m], lw=0.8, alpha=0.8, label=label,
-                    color=PAIR_COLORS[c % len(PAIR_COLORS)])
+            ax.plot(
+                t[m], s[m], lw=0.8, alpha=0.8, label=label, color=PAIR_COLORS[c % len(PAIR_COLORS)]
+            )
         ax.set_yscale("symlog", linthresh=linthresh)
         ax.axhline(0.0, color="k", lw=0.6)
         ax.set_xlabel("time (s)")
@@ -233,8 +248,14 @@ def steady_error_figure(
                 continue
             x = i + (j - (P - 1) / 2) * width
             color = styles[pol]["color"]
-            bp = ax.boxplot([v], positions=[x], widths=width * 0.8, whis=(0, 100),
-                            patch_artist=True, manage_ticks=False)  # fmt: skip
+            bp = ax.boxplot(
+                [v],
+                positions=[x],
+                widths=width * 0.8,
+                whis=(0, 100),
+                patch_artist=True,
+                manage_ticks=False,
+            )
             for box in bp["boxes"]:
                 box.set(facecolor=color, alpha=0.25, edgecolor=color)
             for part in ("whiskers", "caps", "medians"):
@@ -248,8 +269,9 @@ def steady_error_figure(
         ax.plot([], [], "s", color=styles[pol]["color"], alpha=0.6, label=styles[pol]["label"])
     ax.set_xticks(range(len(scenarios)))
     long = max((len(s) for s in scenarios), default=0) > 12
-    ax.set_xticklabels(labels, rotation=25 if long else 0, ha="right" if long else "center",
-                       fontsize=8)  # fmt: skip
+    ax.set_xticklabels(
+        labels, rotation=25 if long else 0, ha="right" if long else "center", fontsize=8
+    )
     ax.set_xlim(-0.6, len(scenarios) - 0.4)
     if log:
         from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
@@ -292,8 +314,15 @@ def trajectories_3d_figure(
     others = [i for i in range(positions.shape[1]) if i not in paired]
     for n, i in enumerate(others):
         xyz = positions[:, i]
-        ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], lw=0.5, color=UNPAIRED_COLOR, alpha=0.45,
-                label="other UAVs" if n == 0 else None)  # fmt: skip
+        ax.plot(
+            xyz[:, 0],
+            xyz[:, 1],
+            xyz[:, 2],
+            lw=0.5,
+            color=UNPAIRED_COLOR,
+            alpha=0.45,
+            label="other UAVs" if n == 0 else None,
+        )
     for i, k in sorted(paired.items()):
         xyz = positions[:, i]
         color = PAIR_COLORS[k % len(PAIR_COLORS)]

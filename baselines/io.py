@@ -21,14 +21,23 @@ __all__ = [
     "atomic_path",
     "atomic_write_bytes",
     "atomic_write_text",
+    "format_value",
+    "run_record",
     "write_csv",
     "write_json",
-    "run_record",
-    "format_value",
 ]
 
-_PACKAGES = ("pairflock-env", "numpy", "numba", "gymnasium", "pettingzoo", "stable-baselines3",
-             "torch", "matplotlib", "ray")  # fmt: skip
+_PACKAGES = (
+    "pairflock-env",
+    "numpy",
+    "numba",
+    "gymnasium",
+    "pettingzoo",
+    "stable-baselines3",
+    "torch",
+    "matplotlib",
+    "ray",
+)
 
 
 @contextlib.contextmanager
@@ -118,8 +127,11 @@ def _git_commit() -> str | None:
             return None
         dirty = subprocess.run(
             ["git", "status", "--porcelain", "--untracked-files=no"],
-            cwd=here, capture_output=True, text=True, timeout=5,
-        )  # fmt: skip
+            cwd=here,
+            capture_output=True,
+            text=True,
+            timeout=5,
+        )
         return out.stdout.strip() + ("-dirty" if dirty.stdout.strip() else "")
     except (OSError, subprocess.SubprocessError):
         return None

@@ -81,4 +81,4 @@ class ZeroPolicy(PairPolicy):
     """No pair term: the paired UAVs fly the flocking protocol only."""
 
     def accel(self, obs: np.ndarray) -> np.ndarray:
-        return np.zeros(obs.shape[:-1] + (self.config.dim,))
+        return np.zeros((*obs.shape[:-1], self.config.dim))

@@ -48,11 +48,11 @@ from .report import stat_cell
 __all__ = [
     "CRITERIA",
     "PRESET",
-    "scenario_metrics",
-    "run_job",
     "check_criteria",
-    "summarize",
     "main",
+    "run_job",
+    "scenario_metrics",
+    "summarize",
 ]
 
 PRESET = "paper-quadrotor"
@@ -127,8 +127,9 @@ class _Recorder:
     """``rollout`` hook: what the trace does not keep (all-UAV distance, unpaired velocity
     mismatch, quadrotor limits, and the attitude of one paired UAV of one swarm)."""
 
-    def __init__(self, B: int, T: int, pair: tuple[int, int],
-                 attitude_of: tuple[int, int] | None) -> None:  # fmt: skip
+    def __init__(
+        self, B: int, T: int, pair: tuple[int, int], attitude_of: tuple[int, int] | None
+    ) -> None:
         self.pair = pair
         self.pair_offset = np.full((B, T + 1), np.nan)
         self.min_distance = np.full((B, T + 1), np.nan)
@@ -193,16 +194,26 @@ def run_job(
     general = trace_metrics(tr)
     rows = []
     for b, g in enumerate(general):  # one pair: one row per swarm
-        sm = scenario_metrics(tr.t, tr.pair_error[b, 0], rec.min_distance[b],
-                              rec.velocity_mismatch[b], rec.pair_offset[b])  # fmt: skip
+        sm = scenario_metrics(
+            tr.t,
+            tr.pair_error[b, 0],
+            rec.min_distance[b],
+            rec.velocity_mismatch[b],
+            rec.pair_offset[b],
+        )
         steps = max(int(tr.ended[b]), 1)
-        rows.append({
-            "dynamics": dynamics, "policy": policy, "seed": g["seed"], **sm,
-            "pair_accel_limited_frac": 100.0 * rec.limited_steps[b] / steps,
-            "pair_motor_saturated_frac": 100.0 * rec.saturated_steps[b] / steps,
-            "crashed": int(rec.crashed[b]),
-            **{k: v for k, v in g.items() if k not in ("seed", "pair")},
-        })  # fmt: skip
+        rows.append(
+            {
+                "dynamics": dynamics,
+                "policy": policy,
+                "seed": g["seed"],
+                **sm,
+                "pair_accel_limited_frac": 100.0 * rec.limited_steps[b] / steps,
+                "pair_motor_saturated_frac": 100.0 * rec.saturated_steps[b] / steps,
+                "crashed": int(rec.crashed[b]),
+                **{k: v for k, v in g.items() if k not in ("seed", "pair")},
+            }
+        )
     out: dict[str, Any] = {
         "dynamics": dynamics,
         "policy": policy,
@@ -226,8 +237,10 @@ def run_job(
 # --------------------------------------------------------------------------- report
 def _order(key: tuple[str, str]) -> tuple[int, int]:
     dyn, pol = key
-    return ({"quadrotor": 0, "particle": 1}.get(dyn, 2),
-            {"smc": 0, "proportional": 1, "zero": 2}.get(pol, 3))  # fmt: skip
+    return (
+        {"quadrotor": 0, "particle": 1}.get(dyn, 2),
+        {"smc": 0, "proportional": 1, "zero": 2}.get(pol, 3),
+    )
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> str:
@@ -251,8 +264,10 @@ def summarize(rows: Sequence[dict[str, Any]]) -> str:
 def check_criteria(rows: Sequence[dict[str, Any]]) -> list[tuple[str, bool, str]]:
     """The issue's criteria for sliding mode on the quadrotor, every seed."""
     c = CRITERIA
-    smc = sorted((r for r in rows if r["dynamics"] == "quadrotor" and r["policy"] == "smc"),
-                 key=lambda r: r["seed"])  # fmt: skip
+    smc = sorted(
+        (r for r in rows if r["dynamics"] == "quadrotor" and r["policy"] == "smc"),
+        key=lambda r: r["seed"],
+    )
     if not smc:
         return []
 
@@ -261,34 +276,71 @@ def check_criteria(rows: Sequence[dict[str, Any]]) -> list[tuple[str, bool, str]
 
     out = []
     entry = arr("band_entry_time")
-    out.append((f"smc: into the {c['band']} m band within {c['band_entry_by']:g} s",
-                bool(np.all(entry <= c["band_entry_by"])),
-                f"{np.nanmin(entry):.2f}-{np.nanmax(entry):.2f} s" if np.isfinite(entry).any()
-                else "never"))  # fmt: skip
+    out.append(
+        (
+            f"smc: into the {c['band']} m band within {c['band_entry_by']:g} s",
+            bool(np.all(entry <= c["band_entry_by"])),
+            f"{np.nanmin(entry):.2f}-{np.nanmax(entry):.2f} s"
+            if np.isfinite(entry).any()
+            else "never",
+        )
+    )
     s = arr("straight_max_error")
-    out.append((f"smc: max abs pair error <= {c['straight_max']} m in [15,20], [27,50], [57,65] s",
-                bool(np.all(s <= c["straight_max"])), f"max {np.max(s):.3f} m"))  # fmt: skip
+    out.append(
+        (
+            f"smc: max abs pair error <= {c['straight_max']} m in [15,20], [27,50], [57,65] s",
+            bool(np.all(s <= c["straight_max"])),
+            f"max {np.max(s):.3f} m",
+        )
+    )
     tp = arr("turn_peak_error")
-    out.append((f"smc: peak abs pair error in the turns <= {c['turn_peak_max']} m",
-                bool(np.all(tp <= c["turn_peak_max"])), f"max {np.max(tp):.3f} m"))  # fmt: skip
+    out.append(
+        (
+            f"smc: peak abs pair error in the turns <= {c['turn_peak_max']} m",
+            bool(np.all(tp <= c["turn_peak_max"])),
+            f"max {np.max(tp):.3f} m",
+        )
+    )
     md = arr("min_distance")
-    out.append((f"smc: no two UAVs closer than {c['min_distance']} m",
-                bool(np.all(md >= c["min_distance"])), f"min {np.min(md):.2f} m"))  # fmt: skip
+    out.append(
+        (
+            f"smc: no two UAVs closer than {c['min_distance']} m",
+            bool(np.all(md >= c["min_distance"])),
+            f"min {np.min(md):.2f} m",
+        )
+    )
     vm = arr("velocity_mismatch")
-    out.append(((f"smc: unpaired velocity within {c['velocity_tolerance']} m/s of the leader "
-                 "in [35,50], [60,65] s"), bool(np.all(vm <= c["velocity_tolerance"])),
-                f"max {np.max(vm):.3f} m/s"))  # fmt: skip
+    out.append(
+        (
+            (
+                f"smc: unpaired velocity within {c['velocity_tolerance']} m/s of the leader "
+                "in [35,50], [60,65] s"
+            ),
+            bool(np.all(vm <= c["velocity_tolerance"])),
+            f"max {np.max(vm):.3f} m/s",
+        )
+    )
     crashed = arr("crashed")
-    out.append(("smc: no crash, every episode runs 65 s",
-                bool(np.all(crashed == 0) and np.all(arr("steps_run") == smc[0]["steps_run"])),
-                f"{int(crashed.sum())} crashes"))  # fmt: skip
+    out.append(
+        (
+            "smc: no crash, every episode runs 65 s",
+            bool(np.all(crashed == 0) and np.all(arr("steps_run") == smc[0]["steps_run"])),
+            f"{int(crashed.sum())} crashes",
+        )
+    )
     part = {r["seed"]: r for r in rows if r["dynamics"] == "particle" and r["policy"] == "smc"}
     if part and all(r["seed"] in part for r in smc):
         cost = s - np.array([float(part[r["seed"]]["straight_max_error"]) for r in smc])
-        out.append(((f"smc: attitude loop costs <= {c['attitude_cost']} m over the particle "
-                     "(straight-flight max error, same seed)"),
-                    bool(np.all(cost <= c["attitude_cost"])),
-                    f"{np.min(cost):+.3f} to {np.max(cost):+.3f} m"))  # fmt: skip
+        out.append(
+            (
+                (
+                    f"smc: attitude loop costs <= {c['attitude_cost']} m over the particle "
+                    "(straight-flight max error, same seed)"
+                ),
+                bool(np.all(cost <= c["attitude_cost"])),
+                f"{np.min(cost):+.3f} to {np.max(cost):+.3f} m",
+            )
+        )
     return out
 
 
@@ -304,31 +356,52 @@ def _figures(jobs: dict[tuple[str, str], dict[str, Any]], out: Path, dpi: int) -
     seed = j["rows"][0]["seed"]
     if "positions" in j:
         times = [0.0, 4.0, 8.0, 20.0, 21.0, 35.0, 51.0, float(j["t"][-1])]
-        fig = qf.snapshots_figure(j["t"], j["positions"], j["velocities"], j["leader_positions"],
-                                  cfg.pairs, cfg.d_m, times,
-                                  f"10 quadrotors, sliding mode: positions and headings "
-                                  f"(seed {seed})")  # fmt: skip
+        fig = qf.snapshots_figure(
+            j["t"],
+            j["positions"],
+            j["velocities"],
+            j["leader_positions"],
+            cfg.pairs,
+            cfg.d_m,
+            times,
+            f"10 quadrotors, sliding mode: positions and headings (seed {seed})",
+        )
         paths.append(save_figure(fig, out / "snapshots.png", dpi=dpi))
-        fig = trajectories_3d_figure(j["positions"], j["leader_positions"], cfg.pairs,
-                                     f"3-D trajectories, {main_key[0]}, sliding mode "
-                                     f"(seed {seed})", t=j["t"],
-                                     marks=(0.0, 20.0, 35.0, 50.0))  # fmt: skip
+        fig = trajectories_3d_figure(
+            j["positions"],
+            j["leader_positions"],
+            cfg.pairs,
+            f"3-D trajectories, {main_key[0]}, sliding mode (seed {seed})",
+            t=j["t"],
+            marks=(0.0, 20.0, 35.0, 50.0),
+        )
         paths.append(save_figure(fig, out / "trajectories_3d.png", dpi=dpi))
-    surf = {f"{dyn}, {pol}": (v["t"], v["surface"][0]) for (dyn, pol), v in jobs.items()
-            if pol == "smc"}  # fmt: skip
+    surf = {
+        f"{dyn}, {pol}": (v["t"], v["surface"][0]) for (dyn, pol), v in jobs.items() if pol == "smc"
+    }
     if surf:
-        fig = surface_panels_figure({k: {k: v} for k, v in surf.items()}, np.inf,
-                                    f"Sliding surface s(t), sliding mode (seed {seed})",
-                                    ncols=1, linthresh=1.0, sharey=True)  # fmt: skip
+        fig = surface_panels_figure(
+            {k: {k: v} for k, v in surf.items()},
+            np.inf,
+            f"Sliding surface s(t), sliding mode (seed {seed})",
+            ncols=1,
+            linthresh=1.0,
+            sharey=True,
+        )
         paths.append(save_figure(fig, out / "sliding_surface.png", dpi=dpi))
     curves = {(dyn, pol): (v["t"], v["pair_error"][0]) for (dyn, pol), v in jobs.items()}
-    fig = qf.pair_error_figure(curves, STRAIGHT_WINDOWS, CRITERIA["band"],
-                               f"Pair distance error ||y|| - d_m (seed {seed})")  # fmt: skip
+    fig = qf.pair_error_figure(
+        curves, STRAIGHT_WINDOWS, CRITERIA["band"], f"Pair distance error ||y|| - d_m (seed {seed})"
+    )
     paths.append(save_figure(fig, out / "pair_error.png", dpi=dpi))
     if "R" in j:
-        fig = qf.euler_figure(j["t"], j["R_des"], j["R"],
-                              f"Paired UAV No. 1, sliding mode: attitude commands (Fig. 19) "
-                              f"and response (Fig. 20), seed {seed}")  # fmt: skip
+        fig = qf.euler_figure(
+            j["t"],
+            j["R_des"],
+            j["R"],
+            f"Paired UAV No. 1, sliding mode: attitude commands (Fig. 19) "
+            f"and response (Fig. 20), seed {seed}",
+        )
         paths.append(save_figure(fig, out / "euler_angles.png", dpi=dpi))
     return paths
 
@@ -341,27 +414,59 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument("--seeds", type=int, default=10, help="number of seeds per combination")
-    p.add_argument("--first-seed", type=int, default=0, help="seeds are first-seed, first-seed+1, ...")
-    p.add_argument("--policies", nargs="+", default=["smc", "proportional", "zero"],
-                   help="pair controllers (names for baselines.make_pair_policy)")
-    p.add_argument("--dynamics", nargs="+", default=["quadrotor", "particle"],
-                   choices=["quadrotor", "particle"], help="vehicle models to compare")
-    p.add_argument("--smc-k", type=float, default=None,
-                   help="switching gain k of sliding mode (default: the preset's, 10 m/s^2)")
-    p.add_argument("--smc-c", type=float, default=None,
-                   help="surface slope c of sliding mode (default: the preset's, 1 1/s)")
+    p.add_argument(
+        "--first-seed", type=int, default=0, help="seeds are first-seed, first-seed+1, ..."
+    )
+    p.add_argument(
+        "--policies",
+        nargs="+",
+        default=["smc", "proportional", "zero"],
+        help="pair controllers (names for baselines.make_pair_policy)",
+    )
+    p.add_argument(
+        "--dynamics",
+        nargs="+",
+        default=["quadrotor", "particle"],
+        choices=["quadrotor", "particle"],
+        help="vehicle models to compare",
+    )
+    p.add_argument(
+        "--smc-k",
+        type=float,
+        default=None,
+        help="switching gain k of sliding mode (default: the preset's, 10 m/s^2)",
+    )
+    p.add_argument(
+        "--smc-c",
+        type=float,
+        default=None,
+        help="surface slope c of sliding mode (default: the preset's, 1 1/s)",
+    )
     p.add_argument("--kp", type=float, default=None, help="gain k_p of proportional (default 1)")
     p.add_argument("--horizon", type=float, default=None, help="episode length in s (preset: 65)")
-    p.add_argument("--set", dest="overrides", action="append", default=[], metavar="FIELD=VALUE",
-                   help="override a PairFlockConfig field for every run (repeatable), e.g. "
-                        "--set quad_motor_time_constant=0.05 (values are Python literals)")
+    p.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="FIELD=VALUE",
+        help="override a PairFlockConfig field for every run (repeatable), e.g. "
+        "--set quad_motor_time_constant=0.05 (values are Python literals)",
+    )
     p.add_argument("--out", type=Path, default=Path("results/quadrotor"), help="output folder")
-    p.add_argument("--workers", type=int, default=os.cpu_count() or 1,
-                   help="worker processes (1 runs in this process)")
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="worker processes (1 runs in this process)",
+    )
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.add_argument("--dpi", type=int, default=100, help="resolution of the PNG figures")
-    p.add_argument("--check", action="store_true",
-                   help="verify the issue's criteria (exit status 1 if any fails)")
+    p.add_argument(
+        "--check",
+        action="store_true",
+        help="verify the issue's criteria (exit status 1 if any fails)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
 
@@ -460,28 +565,45 @@ def main(argv: Sequence[str] | None = None) -> int:
     if overrides or any(gains.values()):
         md += [f"Overrides: `{overrides}`; gains: `{gains}`.", ""]
     if checks:
-        md += ["## Criteria (sliding mode on the quadrotor, every seed)", "",
-               "| criterion | result | measured |", "|---|---|---|"]  # fmt: skip
+        md += [
+            "## Criteria (sliding mode on the quadrotor, every seed)",
+            "",
+            "| criterion | result | measured |",
+            "|---|---|---|",
+        ]
         md += [f"| {c} | {'pass' if ok else 'FAIL'} | {d} |" for c, ok, d in checks]
     atomic_write_text(out / "summary.md", "\n".join(md) + "\n")
     fig_paths = _figures(results, out, args.dpi) if record else []
     total = time.perf_counter() - t0
-    write_json(out / "run.json", run_record(
-        preset=PRESET, seeds=seeds, policies=args.policies, dynamics=args.dynamics,
-        overrides=overrides, gains=gains,
-        config={d: results[d, args.policies[0]]["config"].to_dict() for d in args.dynamics},
-        timing={"simulation_s": round(sim_wall, 2), "total_s": round(total, 2),
+    write_json(
+        out / "run.json",
+        run_record(
+            preset=PRESET,
+            seeds=seeds,
+            policies=args.policies,
+            dynamics=args.dynamics,
+            overrides=overrides,
+            gains=gains,
+            config={d: results[d, args.policies[0]]["config"].to_dict() for d in args.dynamics},
+            timing={
+                "simulation_s": round(sim_wall, 2),
+                "total_s": round(total, 2),
                 "workers": args.workers,
-                "sim_seconds_per_wall_second": {f"{d}/{p}": round(v["sim_s"] / v["wall_s"], 1)
-                                                for (d, p), v in results.items()}},
-    ))  # fmt: skip
+                "sim_seconds_per_wall_second": {
+                    f"{d}/{p}": round(v["sim_s"] / v["wall_s"], 1) for (d, p), v in results.items()
+                },
+            },
+        ),
+    )
     print(table)
     if checks:
         print()
         for c, ok, d in checks:
             print(f"[{'pass' if ok else 'FAIL'}] {c}: {d}")
-    print(f"\nwrote {out / 'results.csv'}, {out / 'summary.md'}, {len(fig_paths)} figures in "
-          f"{total:.1f} s (simulation {sim_wall:.1f} s, {args.workers} workers)")  # fmt: skip
+    print(
+        f"\nwrote {out / 'results.csv'}, {out / 'summary.md'}, {len(fig_paths)} figures in "
+        f"{total:.1f} s (simulation {sim_wall:.1f} s, {args.workers} workers)"
+    )
     if args.check and not (checks and all(ok for _, ok, _ in checks)):
         return 1
     return 0

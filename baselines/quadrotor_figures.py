@@ -17,9 +17,9 @@ from pairflock_env.math3d import euler_zyx
 from pairflock_env.render import draw_swarm
 
 __all__ = [
-    "snapshots_figure",
-    "pair_error_figure",
     "euler_figure",
+    "pair_error_figure",
+    "snapshots_figure",
 ]
 
 _STYLE = {
@@ -36,8 +36,9 @@ def _nearest(t: np.ndarray, ti: float) -> int:
     return int(np.argmin(np.abs(np.asarray(t) - ti)))
 
 
-def snapshots_figure(t, positions, velocities, leader_positions, pairs, d_m,
-                     times: Sequence[float], title: str) -> Figure:  # fmt: skip
+def snapshots_figure(
+    t, positions, velocities, leader_positions, pairs, d_m, times: Sequence[float], title: str
+) -> Figure:
     """Positions and headings (x-y plane) at several times (Fig. 15), one panel each, with
     the mean altitude in the panel title and velocity arrows (1 m/s = 0.4 m) on the last."""
     n = len(times)
@@ -49,11 +50,29 @@ def snapshots_figure(t, positions, velocities, leader_positions, pairs, d_m,
         k = _nearest(t, ti)
         ax = fig.add_subplot(rows, cols, i + 1)
         q, p = positions[k], velocities[k]
-        headings = draw_swarm(ax, q, p, pairs, d_m, leader_positions[k], headings=headings,
-                              size=0.8, title=f"t = {t[k]:.0f} s, z = {q[:, 2].mean():.1f} m")  # fmt: skip
+        headings = draw_swarm(
+            ax,
+            q,
+            p,
+            pairs,
+            d_m,
+            leader_positions[k],
+            headings=headings,
+            size=0.8,
+            title=f"t = {t[k]:.0f} s, z = {q[:, 2].mean():.1f} m",
+        )
         if i == n - 1:
-            ax.quiver(q[:, 0], q[:, 1], p[:, 0], p[:, 1], color="0.3", width=0.004,
-                      angles="xy", scale_units="xy", scale=2.5)  # fmt: skip
+            ax.quiver(
+                q[:, 0],
+                q[:, 1],
+                p[:, 0],
+                p[:, 1],
+                color="0.3",
+                width=0.004,
+                angles="xy",
+                scale_units="xy",
+                scale=2.5,
+            )
         ax.tick_params(labelsize=7)
         ax.xaxis.label.set_size(8)
         ax.yaxis.label.set_size(8)
@@ -62,8 +81,12 @@ def snapshots_figure(t, positions, velocities, leader_positions, pairs, d_m,
     return fig
 
 
-def pair_error_figure(curves: Mapping[tuple[str, str], tuple[np.ndarray, np.ndarray]],
-                      straight_windows, band: float, title: str) -> Figure:  # fmt: skip
+def pair_error_figure(
+    curves: Mapping[tuple[str, str], tuple[np.ndarray, np.ndarray]],
+    straight_windows,
+    band: float,
+    title: str,
+) -> Figure:
     """Pair distance error over time (Fig. 18): the whole run on a symlog axis, and from 5 s
     on a linear axis with the straight-flight windows shaded and the +-band lines."""
     fig = Figure(figsize=(12.0, 4.0))
@@ -75,8 +98,7 @@ def pair_error_figure(curves: Mapping[tuple[str, str], tuple[np.ndarray, np.ndar
         t, e = curves[key]
         st = _STYLE.get(key, dict(label=f"{key[0]}, {key[1]}"))
         for ax in (ax1, ax2):
-            ax.plot(t, e, lw=0.9, color=st.get("color"), ls=st.get("ls", "-"),
-                    label=st["label"])  # fmt: skip
+            ax.plot(t, e, lw=0.9, color=st.get("color"), ls=st.get("ls", "-"), label=st["label"])
     ax1.set_yscale("symlog", linthresh=0.5)
     ax1.set_title("whole run", fontsize=9)
     t_end = max(float(c[0][-1]) for c in curves.values())
@@ -84,8 +106,9 @@ def pair_error_figure(curves: Mapping[tuple[str, str], tuple[np.ndarray, np.ndar
     ax2.set_ylim(-1.2, 1.2)
     for a, b in straight_windows:
         ax2.axvspan(a, b, color="tab:green", alpha=0.08, lw=0)
-    ax2.set_title("from 5 s (shaded: straight flight, where |error| <= 0.5 m is required)",
-                  fontsize=9)  # fmt: skip
+    ax2.set_title(
+        "from 5 s (shaded: straight flight, where |error| <= 0.5 m is required)", fontsize=9
+    )
     for ax in (ax1, ax2):
         ax.axhline(0.0, color="k", lw=0.6)
         for b in (-band, band):

@@ -17,7 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["hover_drift", "orthonormality_over_scenario", "step_response", "main"]
+__all__ = ["hover_drift", "main", "orthonormality_over_scenario", "step_response"]
 
 PRESET = "paper-quadrotor"
 
@@ -43,7 +43,7 @@ def hover_drift(seconds: float = 10.0, B: int = 2, N: int = 3) -> dict[str, floa
     q0 = q.copy()
     a = np.zeros_like(q)
     saturated = False
-    for _ in range(int(round(seconds / cfg.dt))):
+    for _ in range(round(seconds / cfg.dt)):
         model.advance(q, p, a)
         saturated |= bool(model.motor_saturated.any())
     from pairflock_env.math3d import orthonormality_error
@@ -85,15 +85,16 @@ def orthonormality_over_scenario(seed: int = 0, policy: str = "smc") -> dict[str
     }
 
 
-def step_response(direction=(1.0, 0.0), size: float = 2.0, seconds: float = 2.0,
-                  **overrides) -> dict[str, float]:  # fmt: skip
+def step_response(
+    direction=(1.0, 0.0), size: float = 2.0, seconds: float = 2.0, **overrides
+) -> dict[str, float]:
     """Response of the horizontal acceleration (along the command) to a step of ``size``
     m/s^2 from hover, sampled every physics step (500 Hz)."""
     cfg, model, q, p = hovering_model(dt=0.002, substeps=1, **overrides)
     a = np.zeros_like(q)
     d = np.asarray(direction, dtype=float)
     a[0, 0, :2] = size * d / np.linalg.norm(d)
-    n = int(round(seconds / cfg.dt))
+    n = round(seconds / cfg.dt)
     acc = np.empty(n)
     saturated = False
     for k in range(n):
@@ -125,23 +126,30 @@ def step_response(direction=(1.0, 0.0), size: float = 2.0, seconds: float = 2.0,
 def main(argv: Sequence[str] | None = None) -> int:
     for var in ("OMP_NUM_THREADS", "NUMBA_NUM_THREADS"):
         os.environ.setdefault(var, "1")
-    ap = argparse.ArgumentParser(prog="python -m baselines.quadrotor_invariants",
-                                 description=__doc__.split("\n\n")[0])  # fmt: skip
+    ap = argparse.ArgumentParser(
+        prog="python -m baselines.quadrotor_invariants", description=__doc__.split("\n\n")[0]
+    )
     ap.add_argument("--seed", type=int, default=0, help="seed of the 65 s scenario run")
     args = ap.parse_args(argv)
     h = hover_drift()
-    print(f"hover {h['seconds']:g} s (float64): position drift {h['position_drift_m']:.3g} m, "
-          f"velocity {h['velocity_drift_mps']:.3g} m/s, rotor speed change "
-          f"{h['rotor_speed_change']:.3g} rad/s, |R^T R - I| {h['orthonormality_error']:.3g}")  # fmt: skip
+    print(
+        f"hover {h['seconds']:g} s (float64): position drift {h['position_drift_m']:.3g} m, "
+        f"velocity {h['velocity_drift_mps']:.3g} m/s, rotor speed change "
+        f"{h['rotor_speed_change']:.3g} rad/s, |R^T R - I| {h['orthonormality_error']:.3g}"
+    )
     o = orthonormality_over_scenario(args.seed)
-    print(f"SO(3) over the {o['sim_time_s']:g} s scenario (smc, seed {args.seed}): max |R^T R - I| "
-          f"= {o['max_orthonormality_error']:.3g}, largest tilt {o['max_tilt_deg']:.1f} deg")  # fmt: skip
+    print(
+        f"SO(3) over the {o['sim_time_s']:g} s scenario (smc, seed {args.seed}): max |R^T R - I| "
+        f"= {o['max_orthonormality_error']:.3g}, largest tilt {o['max_tilt_deg']:.1f} deg"
+    )
     print("2 m/s^2 horizontal acceleration step from hover:")
     for d in ((1.0, 0.0), (0.0, 1.0), (1.0, -1.0)):
         s = step_response(d)
-        print(f"  direction {d}: 90 % at {s['t90_s']:.3f} s, within 10 % from "
-              f"{s['settle_10pct_s']:.3f} s, overshoot {100 * s['overshoot']:.2f} %, motor "
-              f"limit hit: {s['motor_saturated']}, altitude change {s['altitude_change_m']:+.3f} m")  # fmt: skip
+        print(
+            f"  direction {d}: 90 % at {s['t90_s']:.3f} s, within 10 % from "
+            f"{s['settle_10pct_s']:.3f} s, overshoot {100 * s['overshoot']:.2f} %, motor "
+            f"limit hit: {s['motor_saturated']}, altitude change {s['altitude_change_m']:+.3f} m"
+        )
     return 0
 
 

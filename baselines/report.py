@@ -24,14 +24,14 @@ __all__ = [
     "COST_METRICS",
     "PIVOT_METRICS",
     "SCENARIO_KEYS",
-    "stat_cell",
-    "summary_table",
-    "summarize",
-    "pivot_table",
     "check_paper_claims",
-    "save_traces",
     "load_traces",
     "make_figures",
+    "pivot_table",
+    "save_traces",
+    "stat_cell",
+    "summarize",
+    "summary_table",
 ]
 
 #: (metric, header, format) of the two summary tables
@@ -114,8 +114,11 @@ def summary_table(
 
 def summarize(rows: Sequence[Mapping[str, Any]], keys: Keys = SCENARIO_KEYS) -> str:
     """Both summary tables (accuracy, then cost and safety)."""
-    return (summary_table(rows, ACCURACY_METRICS, keys) + "\n\n"
-            + summary_table(rows, COST_METRICS, keys))  # fmt: skip
+    return (
+        summary_table(rows, ACCURACY_METRICS, keys)
+        + "\n\n"
+        + summary_table(rows, COST_METRICS, keys)
+    )
 
 
 def pivot_table(
@@ -146,30 +149,61 @@ def check_paper_claims(rows: Sequence[Mapping[str, Any]]) -> list[tuple[str, boo
             s = np.array([r["s_settle_time"] for r in smc])
             b = np.array([r["band_time"] for r in smc])
             e = np.array([r["ss_mean_error"] for r in smc])
-            out.append((f"{sc} smc: s settles in 1.5-3.0 s on every seed",
-                        bool(np.all((s >= 1.5) & (s <= 3.0))), stat_cell(s, "{:.2f}") + " s"))
-            out.append((f"{sc} smc: 0.5 m band in 3.0-5.0 s on every seed",
-                        bool(np.all((b >= 3.0) & (b <= 5.0))), stat_cell(b, "{:.2f}") + " s"))
-            out.append((f"{sc} smc: steady mean error <= 0.20 m on every seed",
-                        bool(np.all(e <= 0.20)), f"max {np.max(e):.3f} m"))  # fmt: skip
+            out.append(
+                (
+                    f"{sc} smc: s settles in 1.5-3.0 s on every seed",
+                    bool(np.all((s >= 1.5) & (s <= 3.0))),
+                    stat_cell(s, "{:.2f}") + " s",
+                )
+            )
+            out.append(
+                (
+                    f"{sc} smc: 0.5 m band in 3.0-5.0 s on every seed",
+                    bool(np.all((b >= 3.0) & (b <= 5.0))),
+                    stat_cell(b, "{:.2f}") + " s",
+                )
+            )
+            out.append(
+                (
+                    f"{sc} smc: steady mean error <= 0.20 m on every seed",
+                    bool(np.all(e <= 0.20)),
+                    f"max {np.max(e):.3f} m",
+                )
+            )
             if prop:
                 pm = float(np.median([r["ss_mean_error"] for r in prop]))
                 sm = float(np.median(e))
-                out.append((f"{sc} proportional median error >= 5x smc median",
-                            pm >= 5 * sm,
-                            f"{pm:.3f} m vs {sm:.3f} m ({pm / sm:.1f}x)"))  # fmt: skip
+                out.append(
+                    (
+                        f"{sc} proportional median error >= 5x smc median",
+                        pm >= 5 * sm,
+                        f"{pm:.3f} m vs {sm:.3f} m ({pm / sm:.1f}x)",
+                    )
+                )
         if zero:
             z = np.array([r["ss_mean_error"] for r in zero])
-            out.append((f"{sc} zero: steady mean error >= 10 m on every seed",
-                        bool(np.all(z >= 10.0)), f"min {np.min(z):.1f} m"))  # fmt: skip
+            out.append(
+                (
+                    f"{sc} zero: steady mean error >= 10 m on every seed",
+                    bool(np.all(z >= 10.0)),
+                    f"min {np.min(z):.1f} m",
+                )
+            )
     return out
 
 
 # ---------------------------------------------------------------------------------------
 # recorded trajectories
 # ---------------------------------------------------------------------------------------
-_TRACE_KEYS = ("t", "pair_error", "surface", "frame_t", "positions", "velocities",
-               "leader_positions")  # fmt: skip
+_TRACE_KEYS = (
+    "t",
+    "pair_error",
+    "surface",
+    "frame_t",
+    "positions",
+    "velocities",
+    "leader_positions",
+)
 
 
 def save_traces(path: Path, traces: Mapping[tuple[int, int], Mapping[str, Any]]) -> Path:
@@ -257,15 +291,22 @@ def make_figures(
     # pair error, several policies per panel (Fig. 10)
     panels = {}
     for i, lab in enumerate(labels):
-        curves = {policies[j]: (traces[i, j]["t"], traces[i, j]["pair_error"][0])
-                  for j in range(len(policies)) if (i, j) in traces}  # fmt: skip
+        curves = {
+            policies[j]: (traces[i, j]["t"], traces[i, j]["pair_error"][0])
+            for j in range(len(policies))
+            if (i, j) in traces
+        }
         if curves:
             panels[lab] = curves
     if panels:
         seed = next(iter(first_seed.values()))
-        paths.append(save_figure(error_figure(
-            panels, f"Pair distance error (pair 0, seed {seed})", styles=styles),
-            out_dir / "pair_error.png", dpi=dpi))  # fmt: skip
+        paths.append(
+            save_figure(
+                error_figure(panels, f"Pair distance error (pair 0, seed {seed})", styles=styles),
+                out_dir / "pair_error.png",
+                dpi=dpi,
+            )
+        )
 
     # sliding surface: one panel per controlling policy, one line per scenario (Figs. 6, 13)
     spanels = {}
@@ -273,8 +314,11 @@ def make_figures(
     for j, pol in enumerate(policies):
         if pol == "zero":
             continue
-        series = {labels[i]: (traces[i, j]["t"], traces[i, j]["surface"][0])
-                  for i in range(len(labels)) if (i, j) in traces}  # fmt: skip
+        series = {
+            labels[i]: (traces[i, j]["t"], traces[i, j]["surface"][0])
+            for i in range(len(labels))
+            if (i, j) in traces
+        }
         if series:
             spanels[styles[pol]["label"]] = series
             t_ends += [r["s_settle_time"] for r in rows if r["policy"] == pol]
@@ -285,22 +329,38 @@ def make_figures(
         reached = [x for x in t_ends if np.isfinite(x)]
         if reached:
             t_max = min(t_max, 2.0 * max(reached))
-        paths.append(save_figure(surface_panels_figure(
-            spanels, t_max, "Sliding surface s(t) (pair 0, first seed)"),
-            out_dir / "sliding_surface.png", dpi=dpi))  # fmt: skip
+        paths.append(
+            save_figure(
+                surface_panels_figure(spanels, t_max, "Sliding surface s(t) (pair 0, first seed)"),
+                out_dir / "sliding_surface.png",
+                dpi=dpi,
+            )
+        )
 
     # steady-state error per scenario and policy, every run a dot
-    boxes = (("ss_mean_error", "steady_error.png", "steady mean |error|"),
-             ("ss_max_error", "steady_max_error.png", "steady max |error|"))
+    boxes = (
+        ("ss_mean_error", "steady_error.png", "steady mean |error|"),
+        ("ss_max_error", "steady_max_error.png", "steady max |error|"),
+    )
     for metric, name, ylabel in boxes:
         vals: dict[tuple[str, str], list[float]] = {}
         for r in rows:
             vals.setdefault((_scenario(r), r["policy"]), []).append(r[metric])
         unit, meaning = METRIC_DOCS[metric]
-        paths.append(save_figure(steady_error_figure(
-            vals, labels, list(policies), f"{ylabel} ({unit})",
-            f"Steady-state pair error: {meaning}", styles=styles),
-            out_dir / name, dpi=dpi))  # fmt: skip
+        paths.append(
+            save_figure(
+                steady_error_figure(
+                    vals,
+                    labels,
+                    list(policies),
+                    f"{ylabel} ({unit})",
+                    f"Steady-state pair error: {meaning}",
+                    styles=styles,
+                ),
+                out_dir / name,
+                dpi=dpi,
+            )
+        )
 
     # snapshots and 3-D trajectories of the recorded run
     for (i, j), tr in sorted(traces.items()):
@@ -313,16 +373,23 @@ def make_figures(
             sel = [r for r in rows if _scenario(r) == labels[i] and r["policy"] == ref]
             times = _snapshot_times(sel, float(tr["frame_t"][-1]))
             fig = snapshot_figure(
-                tr["frame_t"], tr["positions"], tr["velocities"], tr["leader_positions"],
-                cfg["pairs"], cfg["d_m"], times, _title(cfg, styles[pol]["label"], labels[i],
-                                                        tr["seed"]),
-            )  # fmt: skip
+                tr["frame_t"],
+                tr["positions"],
+                tr["velocities"],
+                tr["leader_positions"],
+                cfg["pairs"],
+                cfg["d_m"],
+                times,
+                _title(cfg, styles[pol]["label"], labels[i], tr["seed"]),
+            )
             paths.append(save_figure(fig, out_dir / f"snapshots_{name}.png", dpi=dpi))
         if int(cfg["dim"]) == 3:
             fig = trajectories_3d_figure(
-                tr["positions"], tr["leader_positions"], cfg["pairs"],
+                tr["positions"],
+                tr["leader_positions"],
+                cfg["pairs"],
                 _title(cfg, styles[pol]["label"], labels[i], tr["seed"]),
-            )  # fmt: skip
+            )
             paths.append(save_figure(fig, out_dir / f"trajectories3d_{name}.png", dpi=dpi))
     return paths
 
@@ -331,8 +398,9 @@ def json_rows(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     """Rows for JSON: NaN (a time never reached) becomes null."""
     out = []
     for r in rows:
-        out.append({k: (None if isinstance(v, float) and not np.isfinite(v) else v)
-                    for k, v in r.items()})  # fmt: skip
+        out.append(
+            {k: (None if isinstance(v, float) and not np.isfinite(v) else v) for k, v in r.items()}
+        )
     return out
 
 

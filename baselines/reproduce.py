@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 from .report import check_paper_claims, summarize
 
-__all__ = ["main", "summarize", "check_paper_claims"]
+__all__ = ["check_paper_claims", "main", "summarize"]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -22,8 +22,10 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     argv = list(sys.argv[1:] if argv is None else argv)
     # the user's own --suite/--out (later on the line) win over these defaults
-    return benchmark_main(["--suite", "paper", "--out", "results/reproduce", *argv],
-                          prog="python -m baselines.reproduce")  # fmt: skip
+    return benchmark_main(
+        ["--suite", "paper", "--out", "results/reproduce", *argv],
+        prog="python -m baselines.reproduce",
+    )
 
 
 if __name__ == "__main__":

@@ -101,8 +101,11 @@ def rollout(
 
     def record(k: int, res, live: np.ndarray) -> None:
         info = res.info
-        for name, key in (("pair_error", "pair_error"), ("pair_distance", "pair_distance"),
-                          ("surface", "sliding_surface")):  # fmt: skip
+        for name, key in (
+            ("pair_error", "pair_error"),
+            ("pair_distance", "pair_distance"),
+            ("surface", "sliding_surface"),
+        ):
             getattr(tr, name)[live, :, k] = info[key][live][:, pair_rows]
         tr.min_separation[live, :, k] = info["min_separation"][live]
         tr.speed[live, :, k] = np.linalg.norm(core.p[live][:, ia], axis=-1)
@@ -183,8 +186,12 @@ def trace_metrics(tr: Trace, **kwargs: Any) -> list[dict[str, Any]]:
                 cfg.collision_distance,
                 **kwargs,
             )
-            m = {"seed": tr.seeds[b], "pair": k, **m,
-                 "clipped_steps": int(tr.clipped_steps[b, ms].sum()),
-                 "steps_run": int(tr.ended[b])}  # fmt: skip
+            m = {
+                "seed": tr.seeds[b],
+                "pair": k,
+                **m,
+                "clipped_steps": int(tr.clipped_steps[b, ms].sum()),
+                "steps_run": int(tr.ended[b]),
+            }
             out.append(m)
     return out

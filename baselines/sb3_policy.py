@@ -1,4 +1,6 @@
-"""A trained stable-baselines3 model in the pair action slot: ``make_pair_policy("sb3:<path>", env)``.
+"""A trained stable-baselines3 model in the pair action slot.
+
+``make_pair_policy("sb3:<path>", env)`` loads it.
 
 The model was trained on the observation/action of a learning interface
 (:mod:`pairflock_env.learning`, stored in the model file by ``python -m train``); the adapter
@@ -20,7 +22,7 @@ import numpy as np
 
 from .policies import check_observation, resolve_env
 
-__all__ = ["SB3PairPolicy", "ALGORITHMS", "METADATA_KEY", "load_sb3_policy", "read_metadata"]
+__all__ = ["ALGORITHMS", "METADATA_KEY", "SB3PairPolicy", "load_sb3_policy", "read_metadata"]
 
 #: attribute of a saved SB3 model holding the pairflock metadata (algorithm, interface, config)
 METADATA_KEY = "pairflock"
@@ -126,7 +128,7 @@ class SB3PairPolicy:
             age[decide] = 0
         env_a = self.interface.decode(batch, held)
         new_state = (held, age + 1)
-        return env_a.reshape(obs.shape[:-1] + (self.config.dim,)).astype(np.float32), new_state
+        return env_a.reshape((*obs.shape[:-1], self.config.dim)).astype(np.float32), new_state
 
     def __repr__(self) -> str:
         return f"SB3PairPolicy({type(self.model).__name__}, interface={self.interface.name!r})"

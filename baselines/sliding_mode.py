@@ -24,7 +24,7 @@ from pairflock_env.pairing import sliding_surface
 
 from .policies import PairPolicy
 
-__all__ = ["SlidingModeController", "SMC_DEFAULTS"]
+__all__ = ["SMC_DEFAULTS", "SlidingModeController"]
 
 #: default (c, k) per preset; c defaults to the env's surface_slope
 SMC_DEFAULTS: dict[str | None, dict[str, float]] = {
@@ -40,8 +40,11 @@ class SlidingModeController(PairPolicy):
 
     GAINS = {
         "c": (None, "surface slope c of eq. 26 (1/s); default: the env's surface_slope"),
-        "k": (None, "switching gain k (m/s^2); default: SMC_DEFAULTS of the preset "
-                    "(300 for paper, 10 for paper-quadrotor)"),
+        "k": (
+            None,
+            "switching gain k (m/s^2); default: SMC_DEFAULTS of the preset "
+            "(300 for paper, 10 for paper-quadrotor)",
+        ),
         "a": (None, "attraction slope in the a N y term; default: the env's attraction"),
         "b": (None, "consensus weight in the b N y' term; default: the env's consensus"),
         "boundary_layer": (None, "phi (m^2/s) for sat(s/phi); None uses sign(s) as the paper"),
@@ -79,7 +82,9 @@ class SlidingModeController(PairPolicy):
         s = sliding_surface(y, ydot, d_m, c)[..., None]
         sw = np.sign(s) if phi is None else np.clip(s / phi, -1.0, 1.0)
         ratio = F / np.maximum(E, 1e-12)
-        return 0.5 * (a * n_shared * y + b * n_shared * ydot - c * ydot - ratio * y - k * np.sign(y) * sw)
+        return 0.5 * (
+            a * n_shared * y + b * n_shared * ydot - c * ydot - ratio * y - k * np.sign(y) * sw
+        )
 
     def accel(self, obs: np.ndarray) -> np.ndarray:
         L = self.layout

@@ -27,16 +27,16 @@ from pathlib import Path
 from typing import Any
 
 __all__ = [
+    "SHORT_NAMES",
     "PolicySpec",
     "Scenario",
-    "parse_policy",
-    "parse_value",
-    "parse_assignments",
-    "parse_scenario",
     "expand_scenarios",
+    "parse_assignments",
+    "parse_policy",
+    "parse_scenario",
+    "parse_value",
     "scenario_label",
     "slug",
-    "SHORT_NAMES",
 ]
 
 #: short names of config fields in scenario labels and table headers
@@ -140,10 +140,13 @@ def parse_policy(spec: str) -> PolicySpec:
     if head not in POLICIES:
         hint = ""
         if colon and head == "sb3":
-            hint = (" (learned policies, 'sb3:<path>', need the SB3 support of "
-                    "pairflock-env[train]; it is not available in this install)")  # fmt: skip
-        raise ValueError(f"policy spec {spec!r} is invalid: unknown policy {head!r}{hint}; "
-                         f"valid: {valid}")  # fmt: skip
+            hint = (
+                " (learned policies, 'sb3:<path>', need the SB3 support of "
+                "pairflock-env[train]; it is not available in this install)"
+            )
+        raise ValueError(
+            f"policy spec {spec!r} is invalid: unknown policy {head!r}{hint}; valid: {valid}"
+        )
     gains = parse_assignments(rest, f"gains of policy {spec!r}")
     return PolicySpec(label=spec, name=head, gains=tuple(gains.items()))
 
@@ -192,8 +195,9 @@ def scenario_label(overrides: Mapping[str, Any]) -> str:
     ``(0, 1), (2, 3)`` are labelled ``pairs=2``."""
     if not overrides:
         return "nominal"
-    return ", ".join(f"{'N' if k == 'n_uavs' else k}={_label_value(k, v)}"
-                     for k, v in overrides.items())  # fmt: skip
+    return ", ".join(
+        f"{'N' if k == 'n_uavs' else k}={_label_value(k, v)}" for k, v in overrides.items()
+    )
 
 
 def expand_scenarios(
@@ -222,8 +226,8 @@ def expand_scenarios(
                 "axis (--set or a shortcut option); set it once"
             )
         for combo in itertools.product(*(vals for _, vals in axes)):
-            g = {k: v for (k, _), v in zip(axes, combo)}
-            varied = {k: v for (k, vals), v in zip(axes, combo) if len(vals) > 1}
+            g = {k: v for (k, _), v in zip(axes, combo, strict=False)}
+            varied = {k: v for (k, vals), v in zip(axes, combo, strict=False) if len(vals) > 1}
             parts = [label if label is not None else (scenario_label(ov) if ov else "")]
             if varied:
                 parts.append(scenario_label(varied))
@@ -237,7 +241,9 @@ def expand_scenarios(
 
 
 def slug(text: str) -> str:
-    """File-name-safe form of a label: ``"N=50"`` -> ``"n50"``, ``"smc:k=200"`` -> ``"smc-k200"``.
+    """File-name-safe form of a label.
+
+    ``"N=50"`` -> ``"n50"``, ``"smc:k=200"`` -> ``"smc-k200"``.
     """
     s = re.sub(r"[=\s]+", "", text.lower())
     s = re.sub(r"(?<!\d)\.|\.(?!\d)", "-", s)  # keep only decimal points

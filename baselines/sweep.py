@@ -20,7 +20,7 @@ from pairflock_env import PairFlockConfig
 
 from .specs import PolicySpec
 
-__all__ = ["Job", "make_jobs", "run_job", "run_jobs", "BACKENDS", "pin_threads"]
+__all__ = ["BACKENDS", "Job", "make_jobs", "pin_threads", "run_job", "run_jobs"]
 
 BACKENDS = ("local", "ray")
 
@@ -148,9 +148,7 @@ def _ray(
     try:
         import ray
     except ImportError:
-        raise ImportError(
-            "--backend ray needs Ray: pip install 'pairflock-env[ray]'"
-        ) from None
+        raise ImportError("--backend ray needs Ray: pip install 'pairflock-env[ray]'") from None
     started = False
     if not ray.is_initialized():
         kwargs: dict[str, Any] = dict(include_dashboard=False, log_to_driver=False)

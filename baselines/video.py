@@ -14,7 +14,7 @@ import numpy as np
 
 from .io import atomic_path
 
-__all__ = ["write_episode_video", "VIDEO_FORMATS"]
+__all__ = ["VIDEO_FORMATS", "write_episode_video"]
 
 VIDEO_FORMATS = (".mp4", ".gif")
 
@@ -24,7 +24,7 @@ def _view_limits(positions: np.ndarray, leader: np.ndarray, smoothing: float) ->
     smoothed box is widened where needed so that no UAV leaves the picture."""
     from pairflock_env.render import fit_limits
 
-    raw = np.array([fit_limits(q, lq) for q, lq in zip(positions, leader)])
+    raw = np.array([fit_limits(q, lq) for q, lq in zip(positions, leader, strict=False)])
     out = np.empty_like(raw)
     out[0] = raw[0]
     for k in range(1, len(raw)):
@@ -71,8 +71,10 @@ def write_episode_video(
     path = Path(path)
     ext = path.suffix.lower()
     if ext not in VIDEO_FORMATS:
-        raise ValueError(f"video path {str(path)!r} is invalid: the extension must be one of "
-                         f"{', '.join(VIDEO_FORMATS)}")  # fmt: skip
+        raise ValueError(
+            f"video path {str(path)!r} is invalid: the extension must be one of "
+            f"{', '.join(VIDEO_FORMATS)}"
+        )
     if isinstance(fps, bool) or not isinstance(fps, (int, np.integer)) or fps < 1:
         raise ValueError(f"fps={fps!r} is invalid: must be an integer >= 1")
     if not np.isfinite(speed) or speed <= 0:
@@ -90,8 +92,11 @@ def write_episode_video(
         if pair_error is not None and error_t is not None:
             e = float(np.interp(t[k], error_t, pair_error))
             text += f"   pair error = {e:+.2f} m"
-        frames.append(renderer.rgb_array(positions[k], velocities[k], leader_positions[k], text,
-                                         limits=tuple(limits[n])))  # fmt: skip
+        frames.append(
+            renderer.rgb_array(
+                positions[k], velocities[k], leader_positions[k], text, limits=tuple(limits[n])
+            )
+        )
     renderer.close()
     return _write_frames(path, frames, fps)
 
@@ -106,11 +111,19 @@ def _write_frames(path: Path, frames: list[np.ndarray], fps: int) -> Path:
         try:
             import imageio_ffmpeg  # noqa: F401
         except ImportError:
-            raise ImportError("mp4 video needs imageio-ffmpeg: pip install "
-                              "'pairflock-env[video]' (or write a .gif)") from None  # fmt: skip
-        kwargs = dict(format="FFMPEG", fps=fps, codec="libx264", quality=6,
-                      pixelformat="yuv420p", macro_block_size=16,
-                      ffmpeg_log_level="error")  # fmt: skip
+            raise ImportError(
+                "mp4 video needs imageio-ffmpeg: pip install "
+                "'pairflock-env[video]' (or write a .gif)"
+            ) from None
+        kwargs = dict(
+            format="FFMPEG",
+            fps=fps,
+            codec="libx264",
+            quality=6,
+            pixelformat="yuv420p",
+            macro_block_size=16,
+            ffmpeg_log_level="error",
+        )
     else:
         kwargs = dict(format="GIF", duration=1000.0 / fps, loop=0)
     with atomic_path(path) as tmp, imageio.get_writer(tmp, **kwargs) as w:

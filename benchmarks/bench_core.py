@@ -16,14 +16,14 @@ import os
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-import argparse  # noqa: E402
-import platform  # noqa: E402
+import argparse
+import platform
 
-import numpy as np  # noqa: E402
-from _timing import median_rate, print_breakdown  # noqa: E402
+import numpy as np
+from _timing import median_rate, print_breakdown
 
-from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
-from pairflock_env.flocking import flocking_pass, pair_pass  # noqa: E402
+from pairflock_env import PairFlockCore, make_config, parallel_env
+from pairflock_env.flocking import flocking_pass, pair_pass
 
 
 def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
@@ -52,12 +52,31 @@ def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
     fl_out, pp_out = {}, {}
 
     def flock():
-        fl_out.update(flocking_pass(core._params, core.q, core.p, lq, lp, core.pinned,
-                                    core.partner_of, out=fl_out or None))  # fmt: skip
+        fl_out.update(
+            flocking_pass(
+                core._params,
+                core.q,
+                core.p,
+                lq,
+                lp,
+                core.pinned,
+                core.partner_of,
+                out=fl_out or None,
+            )
+        )
 
     def pairs():
-        pp_out.update(pair_pass(core.q, core.p, core.agent_uavs, core.partner_uavs, cfg.radius,
-                                cfg.obs_neighbors, out=pp_out or None))  # fmt: skip
+        pp_out.update(
+            pair_pass(
+                core.q,
+                core.p,
+                core.agent_uavs,
+                core.partner_uavs,
+                cfg.radius,
+                cfg.obs_neighbors,
+                out=pp_out or None,
+            )
+        )
 
     def integrate():
         core.vehicle.advance(core.q.copy(), core.p.copy(), core.flock_accel)
@@ -70,9 +89,9 @@ def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
     }
     # the rest of the step, by difference: parts timed alone can add up to a little more than
     # the whole (cache effects, timing noise), so the difference is floored at 0
-    parts["the rest: observations, rewards, infos (numpy)"] = max(0.0, parts["total core.step"] - sum(
-        v for k, v in parts.items() if k != "total core.step"
-    ))  # fmt: skip
+    parts["the rest: observations, rewards, infos (numpy)"] = max(
+        0.0, parts["total core.step"] - sum(v for k, v in parts.items() if k != "total core.step")
+    )
     return parts
 
 
@@ -81,14 +100,18 @@ def main(argv=None) -> int:
         prog="python benchmarks/bench_core.py",
         description=__doc__.split("\n\n")[0] + " Prints medians over repeats.",
     )
-    ap.add_argument("--quick", action="store_true", help="3 repeats of >= 0.2 s instead of 7 x 0.5 s")
+    ap.add_argument(
+        "--quick", action="store_true", help="3 repeats of >= 0.2 s instead of 7 x 0.5 s"
+    )
     ap.add_argument("--n-uavs", type=int, nargs="+", default=[20, 50, 100])
     ap.add_argument("--batch", type=int, nargs="+", default=[1, 64, 256])
     args = ap.parse_args(argv)
     repeats, min_time = (3, 0.2) if args.quick else (7, 0.5)
 
-    print(f"# pairflock_env core speed ({platform.processor() or platform.machine()}, "
-          f"{os.cpu_count()} cores visible, 1 thread used)\n")  # fmt: skip
+    print(
+        f"# pairflock_env core speed ({platform.processor() or platform.machine()}, "
+        f"{os.cpu_count()} cores visible, 1 thread used)\n"
+    )
     print("## Core `PairFlockCore.step`: UAV-steps/s (median)\n")
     print("| N \\ B | " + " | ".join(str(b) for b in args.batch) + " |")
     print("|---|" + "---|" * len(args.batch))

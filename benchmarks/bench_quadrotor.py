@@ -101,21 +101,40 @@ def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
         return 1e6 / median_rate(fn, 1.0, repeats, min_time)
 
     def flock():
-        fl_out.update(flocking_pass(core._params, core.q, core.p, lq, lp, core.pinned,
-                                    core.partner_of, out=fl_out or None))  # fmt: skip
+        fl_out.update(
+            flocking_pass(
+                core._params,
+                core.q,
+                core.p,
+                lq,
+                lp,
+                core.pinned,
+                core.partner_of,
+                out=fl_out or None,
+            )
+        )
 
     def pairs():
-        pp_out.update(pair_pass(core.q, core.p, core.agent_uavs, core.partner_uavs, cfg.radius,
-                                cfg.obs_neighbors, out=pp_out or None))  # fmt: skip
+        pp_out.update(
+            pair_pass(
+                core.q,
+                core.p,
+                core.agent_uavs,
+                core.partner_uavs,
+                cfg.radius,
+                cfg.obs_neighbors,
+                out=pp_out or None,
+            )
+        )
 
     parts = {"total core.step": us(lambda: core.step(actions))}
     if B == 1:
         env = parallel_env(preset=PRESET, max_cycles=10**9)
         env.reset(seed=0)
         act = {ag: np.zeros(3, np.float32) for ag in env.agents}
-        parts["PettingZoo layer (dicts, checks, infos)"] = us(lambda: env.step(act)) - parts[
-            "total core.step"
-        ]
+        parts["PettingZoo layer (dicts, checks, infos)"] = (
+            us(lambda: env.step(act)) - parts["total core.step"]
+        )
     parts["quadrotor: 10 substeps of controller + mixer + motors + rigid body (numba)"] = us(
         lambda: core.vehicle.advance(q, p, a_des)
     )
@@ -135,17 +154,28 @@ def main(argv=None) -> int:
         prog="python benchmarks/bench_quadrotor.py",
         description=__doc__.split("\n\n")[0] + " Prints medians over repeats.",
     )
-    ap.add_argument("--quick", action="store_true", help="3 repeats of >= 0.2 s instead of 7 x 0.5 s")
-    ap.add_argument("--batch", type=int, nargs="+", default=[1, 16, 64, 256],
-                    help="numbers of swarms B for the core table")  # fmt: skip
+    ap.add_argument(
+        "--quick", action="store_true", help="3 repeats of >= 0.2 s instead of 7 x 0.5 s"
+    )
+    ap.add_argument(
+        "--batch",
+        type=int,
+        nargs="+",
+        default=[1, 16, 64, 256],
+        help="numbers of swarms B for the core table",
+    )
     args = ap.parse_args(argv)
     repeats, min_time = (3, 0.2) if args.quick else (7, 0.5)
     cfg = _config()
 
-    print(f"# pairflock_env quadrotor speed ({platform.processor() or platform.machine()}, "
-          f"{os.cpu_count()} cores visible, 1 thread used)\n")  # fmt: skip
-    print(f"Preset `{PRESET}`: N = {cfg.n_uavs}, protocol every {cfg.dt:g} s, physics every "
-          f"{cfg.physics_dt:g} s ({1 / cfg.physics_dt:.0f} Hz, {cfg.substeps} substeps).\n")  # fmt: skip
+    print(
+        f"# pairflock_env quadrotor speed ({platform.processor() or platform.machine()}, "
+        f"{os.cpu_count()} cores visible, 1 thread used)\n"
+    )
+    print(
+        f"Preset `{PRESET}`: N = {cfg.n_uavs}, protocol every {cfg.dt:g} s, physics every "
+        f"{cfg.physics_dt:g} s ({1 / cfg.physics_dt:.0f} Hz, {cfg.substeps} substeps).\n"
+    )
     print("## B = 1 through the PettingZoo API (simulated s per wall s, median)\n")
     print("| loop | x real time | target |\n|---|---|---|")
     r_env = bench_pettingzoo(repeats, min_time, with_policy=False)
@@ -153,17 +183,23 @@ def main(argv=None) -> int:
     ok = "met" if r_env >= TARGET_B1 else "NOT met"
     print(f"| `env.step` (fixed actions) | {r_env:.1f} | >= {TARGET_B1:g} ({ok}) |")
     print(f"| `env.step` + sliding-mode `predict` for both agents | {r_pol:.1f} | - |")
-    print(f"| quadrotor kernel alone (10 UAVs, no env) | {bench_bare_model(1, repeats, min_time):.1f} | - |")
+    bare = bench_bare_model(1, repeats, min_time)
+    print(f"| quadrotor kernel alone (10 UAVs, no env) | {bare:.1f} | - |")
     print("\n## Batched core `PairFlockCore.step` (swarm-seconds per wall s, median)\n")
     print("| B | quadrotor | particle (same scenario) |\n|---|---|---|")
     for B in args.batch:
         rq = bench_core(B, repeats, min_time)
         rp = bench_core(B, repeats, min_time, dynamics="particle")
-        mark = f" (target >= {TARGET_B64:g}: {'met' if rq >= TARGET_B64 else 'NOT met'})" if B == 64 else ""
+        mark = (
+            f" (target >= {TARGET_B64:g}: {'met' if rq >= TARGET_B64 else 'NOT met'})"
+            if B == 64
+            else ""
+        )
         print(f"| {B} | {rq:,.0f}{mark} | {rp:,.0f} |")
     for B in (1, 64):
-        print_breakdown(f"Where the time goes, B = {B}", breakdown(B, repeats, min_time),
-                        "share of core.step")  # fmt: skip
+        print_breakdown(
+            f"Where the time goes, B = {B}", breakdown(B, repeats, min_time), "share of core.step"
+        )
     return 0
 
 

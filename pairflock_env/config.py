@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 __all__ = [
-    "PairFlockConfig",
     "PRESETS",
+    "PairFlockConfig",
     "make_config",
     "preset_names",
 ]
@@ -252,7 +252,7 @@ class PairFlockConfig:
         """Control steps per episode (``max_cycles`` or ``round(horizon / dt)``)."""
         if self.max_cycles is not None:
             return int(self.max_cycles)
-        return max(1, int(round(self.horizon / self.dt)))
+        return max(1, round(self.horizon / self.dt))
 
     @property
     def physics_dt(self) -> float:
@@ -494,7 +494,9 @@ def _validate(cfg: PairFlockConfig) -> None:
         _as_float("collision_distance", cfg.collision_distance, nonneg=True),
     )
     if not isinstance(cfg.terminate_on_collision, (bool, np.bool_)):
-        raise _bad("terminate_on_collision", cfg.terminate_on_collision, "must be a bool", TypeError)
+        raise _bad(
+            "terminate_on_collision", cfg.terminate_on_collision, "must be a bool", TypeError
+        )
     _set(
         cfg,
         "divergence_limit",
@@ -511,13 +513,22 @@ def _validate(cfg: PairFlockConfig) -> None:
 def _validate_leader_path(cfg: PairFlockConfig) -> None:
     """Fields of the ``"climb_and_turn"`` leader (checked whatever the leader type)."""
     if cfg.leader_climb_time is not None:
-        _set(cfg, "leader_climb_time",
-             _as_float("leader_climb_time", cfg.leader_climb_time, nonneg=True))  # fmt: skip
-    _set(cfg, "leader_level_time", _as_float("leader_level_time", cfg.leader_level_time, nonneg=True))
+        _set(
+            cfg,
+            "leader_climb_time",
+            _as_float("leader_climb_time", cfg.leader_climb_time, nonneg=True),
+        )
+    _set(
+        cfg, "leader_level_time", _as_float("leader_level_time", cfg.leader_level_time, nonneg=True)
+    )
     turns = cfg.leader_turns
     if isinstance(turns, str) or not isinstance(turns, Sequence):
-        raise _bad("leader_turns", turns,
-                   "must be a sequence of (start s, duration s, angle deg) triples", TypeError)  # fmt: skip
+        raise _bad(
+            "leader_turns",
+            turns,
+            "must be a sequence of (start s, duration s, angle deg) triples",
+            TypeError,
+        )
     norm: list[tuple[float, float, float]] = []
     for tr in turns:
         if isinstance(tr, str) or not isinstance(tr, Sequence) or len(tr) != 3:
@@ -526,13 +537,15 @@ def _validate_leader_path(cfg: PairFlockConfig) -> None:
         dur = _as_float("leader_turns duration", tr[1], positive=True)
         ang = _as_float("leader_turns angle", tr[2])
         if norm and start < norm[-1][0] + norm[-1][1]:
-            raise _bad("leader_turns", turns,
-                       "turns must be in time order and must not overlap")  # fmt: skip
+            raise _bad("leader_turns", turns, "turns must be in time order and must not overlap")
         norm.append((start, dur, ang))
     _set(cfg, "leader_turns", tuple(norm))
     if cfg.leader == "climb_and_turn" and norm and np.hypot(*cfg.leader_velocity[:2]) == 0:
-        raise _bad("leader_velocity", cfg.leader_velocity,
-                   "needs a non-zero horizontal part to define a heading for leader_turns")  # fmt: skip
+        raise _bad(
+            "leader_velocity",
+            cfg.leader_velocity,
+            "needs a non-zero horizontal part to define a heading for leader_turns",
+        )
 
 
 def _validate_corners(cfg: PairFlockConfig) -> None:
@@ -548,11 +561,12 @@ def _validate_corners(cfg: PairFlockConfig) -> None:
         d = float(np.linalg.norm(pts[i] - pts[j]))
         if d < max(cfg.min_init_spacing, 1e-9):
             raise _bad(
-                "pair_corner", cfg.pair_corner,
+                "pair_corner",
+                cfg.pair_corner,
                 f'puts two pair members of init="corners" {d:g} m apart (at least '
                 f"min_init_spacing={cfg.min_init_spacing} needed); use non-zero offsets on "
                 'more axes or init="random"',
-            )  # fmt: skip
+            )
 
 
 def corner_diagonals(dim: int) -> np.ndarray:
@@ -566,9 +580,18 @@ def corner_diagonals(dim: int) -> np.ndarray:
 
 def _validate_quadrotor(cfg: PairFlockConfig) -> None:
     """The ``quad_*`` fields (always checked, used when ``dynamics="quadrotor"``)."""
-    for name in ("quad_mass", "quad_arm_length", "quad_thrust_coeff", "quad_torque_coeff",
-                 "quad_motor_thrust_max", "quad_gravity", "quad_attitude_freq",
-                 "quad_attitude_damping", "quad_yaw_freq", "quad_accel_limit"):  # fmt: skip
+    for name in (
+        "quad_mass",
+        "quad_arm_length",
+        "quad_thrust_coeff",
+        "quad_torque_coeff",
+        "quad_motor_thrust_max",
+        "quad_gravity",
+        "quad_attitude_freq",
+        "quad_attitude_damping",
+        "quad_yaw_freq",
+        "quad_accel_limit",
+    ):
         _set(cfg, name, _as_float(name, getattr(cfg, name), positive=True))
     for name in ("quad_motor_thrust_min", "quad_motor_time_constant", "quad_drag"):
         _set(cfg, name, _as_float(name, getattr(cfg, name), nonneg=True))
@@ -581,12 +604,16 @@ def _validate_quadrotor(cfg: PairFlockConfig) -> None:
     hover = cfg.quad_mass * cfg.quad_gravity / 4.0
     if not cfg.quad_motor_thrust_min < hover < cfg.quad_motor_thrust_max:
         raise _bad(
-            "quad_motor_thrust_max" if hover >= cfg.quad_motor_thrust_max else "quad_motor_thrust_min",
-            cfg.quad_motor_thrust_max if hover >= cfg.quad_motor_thrust_max else cfg.quad_motor_thrust_min,
+            "quad_motor_thrust_max"
+            if hover >= cfg.quad_motor_thrust_max
+            else "quad_motor_thrust_min",
+            cfg.quad_motor_thrust_max
+            if hover >= cfg.quad_motor_thrust_max
+            else cfg.quad_motor_thrust_min,
             f"the hover thrust per rotor m g / 4 = {hover:.4g} N must lie strictly between "
             f"quad_motor_thrust_min={cfg.quad_motor_thrust_min} and "
             f"quad_motor_thrust_max={cfg.quad_motor_thrust_max}",
-        )  # fmt: skip
+        )
     tilt = _as_float("quad_tilt_limit", cfg.quad_tilt_limit)
     if not 0 < tilt < 90:
         raise _bad("quad_tilt_limit", tilt, "must be in (0, 90) degrees")
@@ -596,20 +623,24 @@ def _validate_quadrotor(cfg: PairFlockConfig) -> None:
         raise _bad("quad_crash_tilt", crash, f"must be in (quad_tilt_limit={tilt}, 180] degrees")
     _set(cfg, "quad_crash_tilt", crash)
     if cfg.quad_ground_altitude is not None:
-        _set(cfg, "quad_ground_altitude",
-             _as_float("quad_ground_altitude", cfg.quad_ground_altitude))  # fmt: skip
+        _set(
+            cfg, "quad_ground_altitude", _as_float("quad_ground_altitude", cfg.quad_ground_altitude)
+        )
     if cfg.dynamics == "quadrotor":
         # explicit integration of the attitude loop needs h * (fastest rate) small
-        rate = max(cfg.quad_attitude_freq, cfg.quad_yaw_freq) * max(1.0, 2 * cfg.quad_attitude_damping)
+        rate = max(cfg.quad_attitude_freq, cfg.quad_yaw_freq) * max(
+            1.0, 2 * cfg.quad_attitude_damping
+        )
         h_max = 0.1 / rate
         if cfg.physics_dt > h_max * (1 + 1e-9):
             need = math.ceil(cfg.dt / h_max - 1e-9)
             raise _bad(
-                "substeps", cfg.substeps,
+                "substeps",
+                cfg.substeps,
                 f"physics step dt/substeps = {cfg.physics_dt:.4g} s is too coarse for the "
                 f"quadrotor attitude loop (needs <= {h_max:.4g} s = 0.1 / {rate:g} rad/s); "
                 f"use substeps >= {need} with dt={cfg.dt}",
-            )  # fmt: skip
+            )
 
 
 # ---------------------------------------------------------------------------------------

@@ -32,7 +32,7 @@ from .observations import ObsLayout
 from .pairing import sliding_surface
 from .rewards import DIVERGENCE_PENALTY, reward_terms
 
-__all__ = ["PairFlockCore", "StepResult", "SeedLike", "AGENT_INFO_KEYS", "SWARM_INFO_KEYS"]
+__all__ = ["AGENT_INFO_KEYS", "SWARM_INFO_KEYS", "PairFlockCore", "SeedLike", "StepResult"]
 
 SeedLike = int | np.random.SeedSequence | None
 
@@ -91,7 +91,9 @@ def real_array(x: Any, name: str, shape: tuple[int, ...] | None = None) -> np.nd
             raise ValueError(f"{name} has shape {x.shape}, expected {shape}")
         if not np.isfinite(x).all():
             bad = np.argwhere(~np.isfinite(x))[0].tolist()
-            raise ValueError(f"{name} contains NaN or inf (first at index {bad}); it must be finite")
+            raise ValueError(
+                f"{name} contains NaN or inf (first at index {bad}); it must be finite"
+            )
     return x.astype(np.float64, copy=False)
 
 
@@ -124,7 +126,11 @@ class PairFlockCore:
             config = config.replace(**overrides)
         if not isinstance(config, PairFlockConfig):
             raise TypeError(f"config={config!r} is invalid: must be a PairFlockConfig")
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+        if (
+            isinstance(num_envs, bool)
+            or not isinstance(num_envs, (int, np.integer))
+            or num_envs < 1
+        ):
             raise ValueError(f"num_envs={num_envs!r} is invalid: must be an integer >= 1")
         self.config = cfg = config
         self.num_envs = B = int(num_envs)
@@ -272,7 +278,7 @@ class PairFlockCore:
             p0 = self._check_state_option(options, "velocities", len(rows))
         # --- apply --------------------------------------------------------------------
         if new_rngs is not None:
-            for r, g in zip(rows, new_rngs):
+            for r, g in zip(rows, new_rngs, strict=False):
                 if g is not None:
                     self._rngs[r] = g
         lq0, _ = self._leader.state(np.zeros(1))
@@ -308,7 +314,8 @@ class PairFlockCore:
             arr = np.broadcast_to(arr, (n_rows, N, D))
         if arr.shape != (n_rows, N, D):
             raise ValueError(
-                f"options[{key!r}] has shape {arr.shape}, expected ({N}, {D}) or ({n_rows}, {N}, {D})"
+                f"options[{key!r}] has shape {arr.shape}, "
+                f"expected ({N}, {D}) or ({n_rows}, {N}, {D})"
             )
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"options[{key!r}] contains NaN or inf")
@@ -423,9 +430,14 @@ class PairFlockCore:
             self._params, q, p, lq, lp, self._pinned, self.partner_of, out=self._flock_out
         )
         pp = self._pair_out = pair_pass(
-            q, p, self.agent_uavs, self.partner_uavs, cfg.radius, cfg.obs_neighbors,
+            q,
+            p,
+            self.agent_uavs,
+            self.partner_uavs,
+            cfg.radius,
+            cfg.obs_neighbors,
             out=self._pair_out,
-        )  # fmt: skip
+        )
         ia, ip = self.agent_uavs, self.partner_uavs
         qa, pa = q[:, ia], p[:, ia]
         off = q[:, ip] - qa
@@ -452,7 +464,7 @@ class PairFlockCore:
             old = self._hist[:, (self._hist_pos + 1) % H][:, :, self._partner_col]
             off_obs, vel_obs, acc_partner = old[0] - qa, old[1] - pa, old[2]
         if cfg.obs_noise_position > 0 or cfg.obs_noise_velocity > 0:
-            z = self._draw_normal((2,) + off.shape[1:])
+            z = self._draw_normal((2, *off.shape[1:]))
             off_obs = off_obs + cfg.obs_noise_position * z[:, 0]
             vel_obs = vel_obs + cfg.obs_noise_velocity * z[:, 1]
 

@@ -33,7 +33,7 @@ __all__ = ["FlockingParams", "flocking_pass", "pair_pass"]
 class FlockingParams:
     """Scalar parameters of the flocking sweep, unpacked once from a config."""
 
-    __slots__ = ("a", "b_r", "inv_sigma2", "r2", "consensus", "c1", "c2", "coll2", "limit")
+    __slots__ = ("a", "b_r", "c1", "c2", "coll2", "consensus", "inv_sigma2", "limit", "r2")
 
     def __init__(self, cfg: PairFlockConfig) -> None:
         self.a = cfg.attraction
@@ -49,9 +49,31 @@ class FlockingParams:
 
 @njit(cache=True, nogil=True)
 def _flocking_kernel(
-    q, p, ql, pl, h, partner, a, b_r, inv_s2, r2, cons, c1, c2, coll2, limit,
-    acc, min_d2, n_coll, lcc, bad, vmis, vmax, parent, size,
-):  # fmt: skip
+    q,
+    p,
+    ql,
+    pl,
+    h,
+    partner,
+    a,
+    b_r,
+    inv_s2,
+    r2,
+    cons,
+    c1,
+    c2,
+    coll2,
+    limit,
+    acc,
+    min_d2,
+    n_coll,
+    lcc,
+    bad,
+    vmis,
+    vmax,
+    parent,
+    size,
+):
     B, N, D = q.shape
     n_unpaired = 0
     for i in range(N):
@@ -85,7 +107,9 @@ def _flocking_kernel(
                 v = p[b, i, k]
                 if not (abs(x) <= limit and abs(v) <= limit):
                     is_bad = True
-                acc[b, i, k] = h[b, i] * (c1 * (ql[b, k] - q[b, i, k]) + c2 * (pl[b, k] - p[b, i, k]))
+                acc[b, i, k] = h[b, i] * (
+                    c1 * (ql[b, k] - q[b, i, k]) + c2 * (pl[b, k] - p[b, i, k])
+                )
         bad[b] = is_bad
         nc = 0
         for i in range(N):
@@ -173,12 +197,31 @@ def flocking_pass(
         }
     pr = params
     _flocking_kernel(
-        q, p, leader_q, leader_p, pinned, partner,
-        pr.a, pr.b_r, pr.inv_sigma2, pr.r2, pr.consensus, pr.c1, pr.c2, pr.coll2, pr.limit,
-        out["acc"], out["min_d2"], out["collisions"], out["largest_component"],
-        out["diverged"], out["velocity_mismatch"], out["velocity_mismatch_max"],
-        out["_parent"], out["_size"],
-    )  # fmt: skip
+        q,
+        p,
+        leader_q,
+        leader_p,
+        pinned,
+        partner,
+        pr.a,
+        pr.b_r,
+        pr.inv_sigma2,
+        pr.r2,
+        pr.consensus,
+        pr.c1,
+        pr.c2,
+        pr.coll2,
+        pr.limit,
+        out["acc"],
+        out["min_d2"],
+        out["collisions"],
+        out["largest_component"],
+        out["diverged"],
+        out["velocity_mismatch"],
+        out["velocity_mismatch_max"],
+        out["_parent"],
+        out["_size"],
+    )
     return out
 
 
@@ -194,7 +237,7 @@ def _pair_kernel(q, p, agents, partners, r2, shared, nbr_pos, nbr_vel, nbr_mask,
             ib = agents[m + 1]
             cnt = 0
             for j in range(N):
-                if j == ia or j == ib:
+                if j in (ia, ib):
                     continue
                 da = 0.0
                 db = 0.0
@@ -220,7 +263,7 @@ def _pair_kernel(q, p, agents, partners, r2, shared, nbr_pos, nbr_vel, nbr_mask,
                 best_d2[s] = np.inf
                 best_j[s] = -1
             for j in range(N):
-                if j == i or j == pi:
+                if j in (i, pi):
                     continue
                 d2 = 0.0
                 for k in range(D):
@@ -268,7 +311,7 @@ def pair_pass(
         neighbours of each other), ``nbr_pos`` / ``nbr_vel`` (B, M, K, dim) offsets of the K
         nearest non-partner UAVs (nearest first, zero-padded) and ``nbr_mask`` (B, M, K).
     """
-    B, N, D = q.shape
+    B, _N, D = q.shape
     M = agents.shape[0]
     K = n_neighbors
     if out is None or out["nbr_pos"].shape != (B, M, K, D):
@@ -281,7 +324,16 @@ def pair_pass(
             "_best_j": np.empty(max(K, 1), np.int64),
         }
     _pair_kernel(
-        q, p, agents, partners, radius**2, out["shared"], out["nbr_pos"], out["nbr_vel"],
-        out["nbr_mask"], out["_best_d2"], out["_best_j"],
-    )  # fmt: skip
+        q,
+        p,
+        agents,
+        partners,
+        radius**2,
+        out["shared"],
+        out["nbr_pos"],
+        out["nbr_vel"],
+        out["nbr_mask"],
+        out["_best_d2"],
+        out["_best_j"],
+    )
     return out

@@ -18,10 +18,10 @@ from numba import njit
 from .config import PairFlockConfig
 
 __all__ = [
-    "LeaderTrajectory",
-    "ConstantVelocityLeader",
-    "ClimbAndTurnLeader",
     "LEADERS",
+    "ClimbAndTurnLeader",
+    "ConstantVelocityLeader",
+    "LeaderTrajectory",
     "make_leader",
 ]
 
@@ -196,23 +196,39 @@ class ClimbAndTurnLeader:
         xy, t_prev, psi_prev = np.zeros(2), 0.0, self.psi0
         for k, (t0, dur, _) in enumerate(self.turns):
             xy = xy + self.speed * (t0 - t_prev) * np.array([np.cos(psi_prev), np.sin(psi_prev)])
-            xy = xy + np.array(_turn_integral(t0, t0 + dur, self.speed, self.psi0, self.turns,
-                                              _GL_X, _GL_W))  # fmt: skip
+            xy = xy + np.array(
+                _turn_integral(t0, t0 + dur, self.speed, self.psi0, self.turns, _GL_X, _GL_W)
+            )
             self._xy_end[k] = xy
             t_prev, psi_prev = t0 + dur, self._psi_after[k]
 
     def heading(self, t: np.ndarray) -> np.ndarray:
         """psi(t) in rad, shape of t."""
         t = np.asarray(t, dtype=np.float64)
-        return np.array([_heading(x, self.psi0, self.turns) for x in t.reshape(-1)]).reshape(t.shape)
+        return np.array([_heading(x, self.psi0, self.turns) for x in t.reshape(-1)]).reshape(
+            t.shape
+        )
 
     def state(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         t = np.ascontiguousarray(t, dtype=np.float64).reshape(-1)
         q = np.empty((t.shape[0], self.dim))
         p = np.empty((t.shape[0], self.dim))
-        _climb_turn_state(t, self.q0, self.speed, self.psi0, self.climb_rate, self.climb_time,
-                          self.level_time, self.turns, self._psi_after, self._xy_end, _GL_X,
-                          _GL_W, q, p)  # fmt: skip
+        _climb_turn_state(
+            t,
+            self.q0,
+            self.speed,
+            self.psi0,
+            self.climb_rate,
+            self.climb_time,
+            self.level_time,
+            self.turns,
+            self._psi_after,
+            self._xy_end,
+            _GL_X,
+            _GL_W,
+            q,
+            p,
+        )
         return q, p
 
 

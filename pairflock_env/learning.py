@@ -101,8 +101,8 @@ __all__ = [
     "PairFrameInterface",
     "PairFrameParams",
     "WorldInterface",
-    "interface_from_dict",
     "closest_approach",
+    "interface_from_dict",
     "make_interface",
     "pair_basis",
     "symlog",
@@ -181,7 +181,8 @@ class LearningInterface:
         raise NotImplementedError
 
     def encode(self, obs: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
-        """Policy observation (..., observation_size) float32 from env observations (..., obs_size)."""
+        """Policy observation (..., observation_size) float32 from env observations
+        (..., obs_size)."""
         raise NotImplementedError
 
     def decode(self, obs: np.ndarray, action: np.ndarray) -> np.ndarray:  # pragma: no cover
@@ -214,8 +215,8 @@ class LearningInterface:
     def _check_action(self, action: np.ndarray, lead: tuple[int, ...]) -> np.ndarray:
         a = np.asarray(action, dtype=np.float64)
         D = self.config.dim
-        if a.shape != lead + (D,):
-            raise ValueError(f"action has shape {a.shape}; expected {lead + (D,)}")
+        if a.shape != (*lead, D):
+            raise ValueError(f"action has shape {a.shape}; expected {(*lead, D)}")
         if not np.all(np.isfinite(a)):
             raise ValueError("action contains NaN or inf; actions must be finite")
         return a
@@ -365,12 +366,18 @@ class PairFrameInterface(LearningInterface):
         self.decision_period = p.decision_period
         D, K = config.dim, p.threat_neighbors
         fields: list[tuple[str, int]] = [
-            ("error", 1), ("error_fine", 1),
-            ("rel_velocity", D), ("rel_velocity_fine", D),
-            ("flock_difference", D), ("flock_accel", D),
-            ("neighbor_offsets", K * D), ("neighbor_velocities", K * D),
-            ("neighbor_mask", K), ("neighbor_tca", K), ("neighbor_miss", K),
-        ]  # fmt: skip
+            ("error", 1),
+            ("error_fine", 1),
+            ("rel_velocity", D),
+            ("rel_velocity_fine", D),
+            ("flock_difference", D),
+            ("flock_accel", D),
+            ("neighbor_offsets", K * D),
+            ("neighbor_velocities", K * D),
+            ("neighbor_mask", K),
+            ("neighbor_tca", K),
+            ("neighbor_miss", K),
+        ]
         self.fields: tuple[tuple[str, int], ...] = tuple((n, s) for n, s in fields if s > 0)
         self._size = sum(s for _, s in self.fields)
 
@@ -383,7 +390,7 @@ class PairFrameInterface(LearningInterface):
         "error": "pair error e = norm(z) - d_m (z: partner offset), / position_scale",
         "error_fine": "symlog(e / fine_position) / 8",
         "rel_velocity": "partner velocity relative to self, pair frame (radial, tangential), "
-                        "/ velocity_scale",
+        "/ velocity_scale",
         "rel_velocity_fine": "symlog(relative velocity / fine_velocity) / 8",
         "flock_difference": "f_partner - f_self in the pair frame, / max_accel",
         "flock_accel": "own flocking command f_self in the pair frame, / max_accel",
@@ -392,14 +399,16 @@ class PairFrameInterface(LearningInterface):
         "neighbor_mask": "1 where a neighbour slot holds a UAV",
         "neighbor_tca": "time of closest approach in [0, tca_horizon], / tca_horizon",
         "neighbor_miss": "distance at closest approach, / neighbor_scale",
-    }  # fmt: skip
+    }
 
     def markdown_table(self) -> str:
         """The encoded observation, field by field (generated from the interface itself)."""
         rows = ["| slice | field | size | meaning |", "|---|---|---|---|"]
         for name, sl in self.field_slices().items():
-            rows.append(f"| {sl.start}:{sl.stop} | `{name}` | {sl.stop - sl.start} | "
-                        f"{self.FIELD_DOCS[name]} |")  # fmt: skip
+            rows.append(
+                f"| {sl.start}:{sl.stop} | `{name}` | {sl.stop - sl.start} | "
+                f"{self.FIELD_DOCS[name]} |"
+            )
         return "\n".join(rows)
 
     def field_slices(self) -> dict[str, slice]:
@@ -449,8 +458,8 @@ class PairFrameInterface(LearningInterface):
             lead = obs.shape[:-1]
             m = mask[..., None]
             parts += [
-                (np.clip(xp / p.neighbor_scale, -_CLIP, _CLIP) * m).reshape(lead + (-1,)),
-                (np.clip(wp / p.velocity_scale, -_CLIP, _CLIP) * m).reshape(lead + (-1,)),
+                (np.clip(xp / p.neighbor_scale, -_CLIP, _CLIP) * m).reshape((*lead, -1)),
+                (np.clip(wp / p.velocity_scale, -_CLIP, _CLIP) * m).reshape((*lead, -1)),
                 mask,
                 tca / p.tca_horizon * mask,
                 np.minimum(miss / p.neighbor_scale, _CLIP) * mask,
@@ -479,9 +488,11 @@ class PairFrameInterface(LearningInterface):
         sep = np.asarray(info["min_separation"], dtype=np.float64)
         if obs is not None and p.approach_horizon > 0 and cfg.obs_neighbors:
             obs = self._check_obs(obs)
-            _, miss = closest_approach(self.layout.get(obs, "neighbor_offsets"),
-                                       self.layout.get(obs, "neighbor_velocities"),
-                                       p.approach_horizon)  # fmt: skip
+            _, miss = closest_approach(
+                self.layout.get(obs, "neighbor_offsets"),
+                self.layout.get(obs, "neighbor_velocities"),
+                p.approach_horizon,
+            )
             miss = np.where(self.layout.get(obs, "neighbor_mask") > 0, miss, np.inf)
             sep = np.minimum(sep, miss.min(axis=-1))
         a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
@@ -516,9 +527,7 @@ def make_interface(name: str, config: PairFlockConfig, **params: Any) -> Learnin
     if not isinstance(name, str) or name not in INTERFACES:
         raise ValueError(f"frame={name!r} is invalid: must be one of {', '.join(INTERFACES)}")
     if name == "world" and set(params) - {"decision_period"}:
-        raise ValueError(
-            f"the world frame takes only decision_period, got {sorted(params)}"
-        )
+        raise ValueError(f"the world frame takes only decision_period, got {sorted(params)}")
     return INTERFACES[name](config, **params)
 
 

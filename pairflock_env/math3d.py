@@ -21,13 +21,13 @@ import numpy as np
 from numba import njit
 
 __all__ = [
+    "euler_zyx",
     "hat",
-    "vee",
+    "orthonormality_error",
+    "rotation_zyx",
     "so3_exp",
     "so3_exp_scalar",
-    "euler_zyx",
-    "rotation_zyx",
-    "orthonormality_error",
+    "vee",
 ]
 
 
@@ -36,7 +36,7 @@ def hat(w: np.ndarray) -> np.ndarray:
     w = np.asarray(w, dtype=np.float64)
     if w.shape[-1:] != (3,):
         raise ValueError(f"w has shape {w.shape}; expected (..., 3)")
-    out = np.zeros(w.shape[:-1] + (3, 3))
+    out = np.zeros((*w.shape[:-1], 3, 3))
     out[..., 0, 1] = -w[..., 2]
     out[..., 0, 2] = w[..., 1]
     out[..., 1, 0] = w[..., 2]
@@ -72,10 +72,16 @@ def so3_exp_scalar(x, y, z):
         b = (1.0 - np.cos(t)) / t2
     # I + a hat + b hat^2, with hat^2 = w w^T - t2 I
     return (
-        1.0 + b * (x * x - t2), -a * z + b * x * y, a * y + b * x * z,
-        a * z + b * x * y, 1.0 + b * (y * y - t2), -a * x + b * y * z,
-        -a * y + b * x * z, a * x + b * y * z, 1.0 + b * (z * z - t2),
-    )  # fmt: skip
+        1.0 + b * (x * x - t2),
+        -a * z + b * x * y,
+        a * y + b * x * z,
+        a * z + b * x * y,
+        1.0 + b * (y * y - t2),
+        -a * x + b * y * z,
+        -a * y + b * x * z,
+        a * x + b * y * z,
+        1.0 + b * (z * z - t2),
+    )
 
 
 @njit(cache=True)
@@ -94,7 +100,7 @@ def so3_exp(phi: np.ndarray) -> np.ndarray:
     flat = np.ascontiguousarray(phi.reshape(-1, 3))
     out = np.empty((flat.shape[0], 9))
     _so3_exp_rows(flat, out)
-    return out.reshape(phi.shape[:-1] + (3, 3))
+    return out.reshape((*phi.shape[:-1], 3, 3))
 
 
 def euler_zyx(R: np.ndarray) -> np.ndarray:
@@ -111,11 +117,13 @@ def euler_zyx(R: np.ndarray) -> np.ndarray:
 
 def rotation_zyx(roll, pitch, yaw) -> np.ndarray:
     """R = Rz(yaw) Ry(pitch) Rx(roll) for arrays of angles (broadcast), shape (..., 3, 3)."""
-    roll, pitch, yaw = np.broadcast_arrays(*(np.asarray(a, dtype=np.float64) for a in (roll, pitch, yaw)))
+    roll, pitch, yaw = np.broadcast_arrays(
+        *(np.asarray(a, dtype=np.float64) for a in (roll, pitch, yaw))
+    )
     cr, sr = np.cos(roll), np.sin(roll)
     cp, sp = np.cos(pitch), np.sin(pitch)
     cy, sy = np.cos(yaw), np.sin(yaw)
-    R = np.empty(roll.shape + (3, 3))
+    R = np.empty((*roll.shape, 3, 3))
     R[..., 0, 0] = cy * cp
     R[..., 0, 1] = cy * sp * sr - sy * cr
     R[..., 0, 2] = cy * sp * cr + sy * sr

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["settle_time", "pair_episode_metrics", "METRIC_DOCS"]
+__all__ = ["METRIC_DOCS", "pair_episode_metrics", "settle_time"]
 
 #: name -> (unit, meaning) of every metric returned by :func:`pair_episode_metrics`
 METRIC_DOCS: dict[str, tuple[str, str]] = {
@@ -20,7 +20,10 @@ METRIC_DOCS: dict[str, tuple[str, str]] = {
     "pair_collision_steps": ("steps", "control steps with that distance < collision_distance"),
     "peak_accel": ("m/s^2", "largest applied pair acceleration ||u|| of either member"),
     "effort": ("m^2/s^3", "integral of ||u||^2 dt, summed over both members"),
-    "chattering": ("m/s^3", "total variation of u per second over the last 10 s, mean of both members"),
+    "chattering": (
+        "m/s^3",
+        "total variation of u per second over the last 10 s, mean of both members",
+    ),
     "peak_speed": ("m/s", "largest speed of either member"),
     "final_largest_component": ("UAVs", "largest connected component of the swarm at the end"),
     "final_velocity_mismatch": ("m/s", "mean ||p_i - p_leader|| of unpaired UAVs at the end"),

@@ -39,25 +39,53 @@ class ObsLayout:
         self.n_neighbors = n_neighbors
         D, K = dim, n_neighbors
         fields = [
-            ObsField("partner_offset", (D,), "m",
-                     "q_partner - q_self (y of eq. 21 for UAV A, -y for UAV B)"),
-            ObsField("partner_velocity", (D,), "m/s",
-                     "p_partner - p_self (y' of eq. 22 for A, -y' for B)"),
+            ObsField(
+                "partner_offset",
+                (D,),
+                "m",
+                "q_partner - q_self (y of eq. 21 for UAV A, -y for UAV B)",
+            ),
+            ObsField(
+                "partner_velocity",
+                (D,),
+                "m/s",
+                "p_partner - p_self (y' of eq. 22 for A, -y' for B)",
+            ),
             ObsField("target_distance", (1,), "m", "d_m of this pair"),
-            ObsField("shared_neighbors", (1,), "count",
-                     "N of eq. 28: neighbours shared by the pair, +2 if A and B are neighbours"),
+            ObsField(
+                "shared_neighbors",
+                (1,),
+                "count",
+                "N of eq. 28: neighbours shared by the pair, +2 if A and B are neighbours",
+            ),
             ObsField("leader_offset", (D,), "m", "q_leader - q_self"),
             ObsField("leader_velocity", (D,), "m/s", "p_leader - p_self"),
-            ObsField("flock_accel", (D,), "m/s^2",
-                     "own flocking command f^g + f^v + h f^gamma this control period"),
-            ObsField("partner_flock_accel", (D,), "m/s^2",
-                     "the partner's flocking command this control period"),
-            ObsField("neighbor_offsets", (K, D), "m",
-                     "q_j - q_self of the K nearest non-partner UAVs, nearest first"),
+            ObsField(
+                "flock_accel",
+                (D,),
+                "m/s^2",
+                "own flocking command f^g + f^v + h f^gamma this control period",
+            ),
+            ObsField(
+                "partner_flock_accel",
+                (D,),
+                "m/s^2",
+                "the partner's flocking command this control period",
+            ),
+            ObsField(
+                "neighbor_offsets",
+                (K, D),
+                "m",
+                "q_j - q_self of the K nearest non-partner UAVs, nearest first",
+            ),
             ObsField("neighbor_velocities", (K, D), "m/s", "p_j - p_self of the same UAVs"),
-            ObsField("neighbor_mask", (K,), "0/1",
-                     "1 where the neighbour slot holds a UAV (0 when N - 2 < K)"),
-        ]  # fmt: skip
+            ObsField(
+                "neighbor_mask",
+                (K,),
+                "0/1",
+                "1 where the neighbour slot holds a UAV (0 when N - 2 < K)",
+            ),
+        ]
         self.fields: tuple[ObsField, ...] = tuple(f for f in fields if f.size > 0)
         self._slices: dict[str, slice] = {}
         offset = 0

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["square_error", "square_error_rate", "sliding_surface", "pair_error"]
+__all__ = ["pair_error", "sliding_surface", "square_error", "square_error_rate"]
 
 
 def _dot(x: np.ndarray, y: np.ndarray) -> np.ndarray:

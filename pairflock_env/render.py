@@ -14,12 +14,12 @@ import warnings
 import numpy as np
 
 __all__ = [
+    "PAIR_COLORS",
     "SwarmArtists",
     "SwarmRenderer",
     "draw_swarm",
     "fit_limits",
     "triangle_markers",
-    "PAIR_COLORS",
 ]
 
 PAIR_COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple", "tab:orange", "tab:brown")
@@ -81,23 +81,34 @@ class SwarmArtists:
         colors = [UNPAIRED_COLOR] * n_uavs
         for k, (a, b) in enumerate(self.pairs):
             colors[a] = colors[b] = PAIR_COLORS[k % len(PAIR_COLORS)]
-        self.triangles = PolyCollection(np.zeros((n_uavs, 3, 2)), facecolors=colors,
-                                        edgecolors="k", linewidths=0.3)  # fmt: skip
+        self.triangles = PolyCollection(
+            np.zeros((n_uavs, 3, 2)), facecolors=colors, edgecolors="k", linewidths=0.3
+        )
         ax.add_collection(self.triangles, autolim=False)
         # per pair: one circle around the converged pair (the paper's marker), or one around
         # each member while they are still apart
         self.circles = []
         for k in range(len(self.pairs)):
             color = PAIR_COLORS[k % len(PAIR_COLORS)]
-            trio = [Circle((0.0, 0.0), self.d_m[k], fill=False, lw=1.2, color=color)
-                    for _ in range(3)]  # fmt: skip
+            trio = [
+                Circle((0.0, 0.0), self.d_m[k], fill=False, lw=1.2, color=color) for _ in range(3)
+            ]
             for c in trio:
                 ax.add_patch(c)
             self.circles.append(trio)
         self.leader = None
         if leader:
-            (self.leader,) = ax.plot([], [], marker="*", ms=14, color="gold", mec="k", mew=0.8,
-                                     ls="none", label="virtual leader")  # fmt: skip
+            (self.leader,) = ax.plot(
+                [],
+                [],
+                marker="*",
+                ms=14,
+                color="gold",
+                mec="k",
+                mew=0.8,
+                ls="none",
+                label="virtual leader",
+            )
         ax.set_aspect("equal")
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
@@ -183,8 +194,17 @@ def draw_swarm(
     ref = float(np.percentile(speed, 90)) if len(q) else 0.0
     if arrows and ref > 0:
         # arrow length proportional to speed; most arrows at most ARROW_FRACTION of the view
-        ax.quiver(q[:, 0], q[:, 1], p[:, 0], p[:, 1], color="0.5", width=0.002,
-                  angles="xy", scale_units="xy", scale=ref / (ARROW_FRACTION * span))  # fmt: skip
+        ax.quiver(
+            q[:, 0],
+            q[:, 1],
+            p[:, 0],
+            p[:, 1],
+            color="0.5",
+            width=0.002,
+            angles="xy",
+            scale_units="xy",
+            scale=ref / (ARROW_FRACTION * span),
+        )
     return h
 
 
@@ -213,17 +233,21 @@ class SwarmRenderer:
         from matplotlib.figure import Figure
 
         art = self._artists
-        if art is None or len(art.triangles.get_paths()) != n_uavs or (
-            (art.leader is not None) != leader
+        if (
+            art is None
+            or len(art.triangles.get_paths()) != n_uavs
+            or ((art.leader is not None) != leader)
         ):
             dpi = 100
             w, h = self.size_px
             self._fig = Figure(figsize=(w / dpi, h / dpi), dpi=dpi)
             self._canvas = FigureCanvasAgg(self._fig)
-            self._fig.subplots_adjust(left=FRAME_MARGIN_PX["left"] / w,
-                                      right=1 - FRAME_MARGIN_PX["right"] / w,
-                                      bottom=FRAME_MARGIN_PX["bottom"] / h,
-                                      top=1 - FRAME_MARGIN_PX["top"] / h)  # fmt: skip
+            self._fig.subplots_adjust(
+                left=FRAME_MARGIN_PX["left"] / w,
+                right=1 - FRAME_MARGIN_PX["right"] / w,
+                bottom=FRAME_MARGIN_PX["bottom"] / h,
+                top=1 - FRAME_MARGIN_PX["top"] / h,
+            )
             ax = self._fig.add_subplot(1, 1, 1)
             self._artists = SwarmArtists(ax, n_uavs, self.pairs, self.d_m, leader=leader)
         return self._artists
@@ -232,8 +256,9 @@ class SwarmRenderer:
         """One frame (H, W, 3) uint8 of swarm state q, p (N, dim); ``limits`` as in
         :func:`draw_swarm` (default: fit this frame)."""
         art = self._frame(len(q), leader_q is not None)
-        self._headings = art.update(q, p, leader_q, headings=self._headings, title=title,
-                                    limits=limits)  # fmt: skip
+        self._headings = art.update(
+            q, p, leader_q, headings=self._headings, title=title, limits=limits
+        )
         self._canvas.draw()
         return np.asarray(self._canvas.buffer_rgba())[..., :3].copy()
 
@@ -253,8 +278,9 @@ class SwarmRenderer:
             return
         if not self._window or not plt.fignum_exists(self._window.number):
             self._window = plt.figure(figsize=(6.4, 6.4))
-            self._window_artists = SwarmArtists(self._window.add_subplot(1, 1, 1), len(q),
-                                                self.pairs, self.d_m, leader=True)  # fmt: skip
+            self._window_artists = SwarmArtists(
+                self._window.add_subplot(1, 1, 1), len(q), self.pairs, self.d_m, leader=True
+            )
         self._headings = self._window_artists.update(
             q, p, leader_q, headings=self._headings, title=title, limits=limits
         )

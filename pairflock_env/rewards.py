@@ -15,7 +15,7 @@ import numpy as np
 
 from .config import PairFlockConfig
 
-__all__ = ["REWARD_TERMS", "reward_terms", "DIVERGENCE_PENALTY"]
+__all__ = ["DIVERGENCE_PENALTY", "REWARD_TERMS", "reward_terms"]
 
 REWARD_TERMS = ("error", "effort", "separation", "collision")
 DIVERGENCE_PENALTY = 100.0
@@ -34,6 +34,5 @@ def reward_terms(
         "error": -cfg.reward_error_weight * np.abs(pair_error),
         "effort": -cfg.reward_effort_weight * effort,
         "separation": -cfg.reward_separation_weight * short,
-        "collision": -cfg.reward_collision_weight
-        * (min_separation < cfg.collision_distance),
+        "collision": -cfg.reward_collision_weight * (min_separation < cfg.collision_distance),
     }

@@ -7,9 +7,9 @@ import os
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-import pytest  # noqa: E402
+import pytest
 
-from pairflock_env import make_config  # noqa: E402
+from pairflock_env import make_config
 
 #: every vehicle model the env offers; tests over ``dynamics`` run once per entry
 DYNAMICS = ["particle", "quadrotor"]

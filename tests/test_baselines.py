@@ -16,8 +16,12 @@ def test_predict_has_sb3_signature_and_batches(small_kwargs):
     for name in ("smc", "proportional", "zero"):
         pol = make_pair_policy(name, env)
         single = {a: pol.predict(o)[0] for a, o in obs.items()}
-        batch, state = pol.predict(np.stack(list(obs.values())), state=None,
-                                   episode_start=np.ones(2, bool), deterministic=True)  # fmt: skip
+        batch, state = pol.predict(
+            np.stack(list(obs.values())),
+            state=None,
+            episode_start=np.ones(2, bool),
+            deterministic=True,
+        )
         assert state is None and batch.dtype == np.float32 and batch.shape == (2, env.config.dim)
         np.testing.assert_array_equal(batch, np.stack(list(single.values())))
         assert all(env.action_space(a).shape == single[a].shape for a in env.agents)
@@ -27,8 +31,14 @@ def test_predict_has_sb3_signature_and_batches(small_kwargs):
 def test_sliding_mode_cancels_what_eq_28_says_it_cancels():
     """s' = 2c y.y' + 2 y'.y' + 2 y.y'' with y'' = (flocking difference) + 2 f^x must equal
     -2 k ||y||_1 sign(s) + 2 y.delta, delta = flocking difference + a N y + b N y'."""
-    cfg = make_config("paper", n_uavs=30, init="random", pair_corner=8.0, swarm_half_width=8.0,
-                      min_init_spacing=1.0)  # fmt: skip
+    cfg = make_config(
+        "paper",
+        n_uavs=30,
+        init="random",
+        pair_corner=8.0,
+        swarm_half_width=8.0,
+        min_init_spacing=1.0,
+    )
     core = PairFlockCore(cfg)
     res = core.reset(seed=4)
     for _ in range(20):  # move a little so that y' != 0
@@ -47,8 +57,9 @@ def test_sliding_mode_cancels_what_eq_28_says_it_cancels():
     s = c * (y @ y - 25.0) + 2 * y @ yd
     sdot = 2 * c * y @ yd + 2 * yd @ yd + 2 * y @ ydd
     delta = dflock + a * n * y + b * n * yd
-    np.testing.assert_allclose(sdot, -2 * k * np.abs(y).sum() * np.sign(s) + 2 * y @ delta,
-                               rtol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(
+        sdot, -2 * k * np.abs(y).sum() * np.sign(s) + 2 * y @ delta, rtol=1e-9
+    )
     # and each UAV applies -f^x(own view): A gets -f^x, B gets +f^x
     act, _ = smc.predict(res.obs[0])
     np.testing.assert_allclose(act[0] * cfg.pair_accel_limit, -fx, rtol=1e-4, atol=1e-3)
@@ -57,7 +68,7 @@ def test_sliding_mode_cancels_what_eq_28_says_it_cancels():
 
 def test_proportional_is_eq_44():
     env = parallel_env(preset="paper", n_uavs=12)
-    obs, infos = env.reset(seed=0)
+    obs, _infos = env.reset(seed=0)
     pol = make_pair_policy("proportional", env, k_p=2.0)
     y = env.core.q[0, 1] - env.core.q[0, 0]  # q_B - q_A
     dist = np.linalg.norm(y)
@@ -90,7 +101,7 @@ def test_each_baseline_beats_zero_on_a_short_run(name, dynamics):
     seeds = [0, 1]
     zero = trace_metrics(rollout(cfg, make_pair_policy("zero", cfg), seeds), steady_window=2.0)
     ctrl = trace_metrics(rollout(cfg, make_pair_policy(name, cfg), seeds), steady_window=2.0)
-    for z, c in zip(zero, ctrl):
+    for z, c in zip(zero, ctrl, strict=False):
         assert c["ss_mean_error"] < 0.2 * z["ss_mean_error"]
 
 

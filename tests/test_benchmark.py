@@ -22,8 +22,14 @@ TINY = ["--suite", "quick", "--n-uavs", "8", "--horizon", "2", "--seeds", "2", "
 
 def _cli(args, cwd: Path) -> subprocess.CompletedProcess:
     env = dict(os.environ, OMP_NUM_THREADS="1", MPLBACKEND="Agg")
-    return subprocess.run([sys.executable, "-m", "baselines.benchmark", *args], cwd=cwd,
-                          env=env, capture_output=True, text=True, timeout=120)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "baselines.benchmark", *args],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 def test_help_lists_suites_and_policy_syntax(capsys):
@@ -36,8 +42,19 @@ def test_help_lists_suites_and_policy_syntax(capsys):
 
 
 def test_cli_twice_gives_byte_identical_results(tmp_path):
-    args = [*TINY, "-p", "smc", "proportional:k_p=2", "zero", "--delay", "0", "3",
-            "--workers", "2", "--no-figures"]  # fmt: skip
+    args = [
+        *TINY,
+        "-p",
+        "smc",
+        "proportional:k_p=2",
+        "zero",
+        "--delay",
+        "0",
+        "3",
+        "--workers",
+        "2",
+        "--no-figures",
+    ]
     a, b = tmp_path / "a", tmp_path / "b"
     for out in (a, b):
         r = _cli([*args, "--out", str(out)], tmp_path)
@@ -53,8 +70,16 @@ def test_cli_twice_gives_byte_identical_results(tmp_path):
     lines = (a / "results.csv").read_text().splitlines()
     header = lines[0].split(",")
     assert header[:6] == ["scenario", "preset", "dynamics", "dim", "n_uavs", "n_pairs"]
-    assert {"partner_delay", "policy", "seed", "ss_mean_error", "effort", "chattering",
-            "final_largest_component", "min_pair_separation"} <= set(header)  # fmt: skip
+    assert {
+        "partner_delay",
+        "policy",
+        "seed",
+        "ss_mean_error",
+        "effort",
+        "chattering",
+        "final_largest_component",
+        "min_pair_separation",
+    } <= set(header)
     assert len(lines) - 1 == 2 * 3 * 2  # scenarios x policies x seeds (one pair)
     res = json.loads((a / "results.json").read_text())
     assert [p["label"] for p in res["policies"]] == ["smc", "proportional:k_p=2", "zero"]
@@ -65,16 +90,39 @@ def test_cli_twice_gives_byte_identical_results(tmp_path):
 @pytest.fixture(scope="module")
 def figure_run(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("figs")
-    assert main([*TINY, "--seeds", "1", "-p", "smc", "zero", "--workers", "1",
-                 "--video", str(out / "ep.gif"), "--video-policy", "zero",
-                 "--out", str(out)]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                *TINY,
+                "--seeds",
+                "1",
+                "-p",
+                "smc",
+                "zero",
+                "--workers",
+                "1",
+                "--video",
+                str(out / "ep.gif"),
+                "--video-policy",
+                "zero",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     return out
 
 
 def test_figures_video_and_same_initial_states(figure_run):
     figs = sorted(p.name for p in figure_run.glob("*.png"))
-    assert figs == ["pair_error.png", "sliding_surface.png", "snapshots_nominal_smc.png",
-                    "steady_error.png", "steady_max_error.png"]  # no snapshots of "zero"
+    assert figs == [
+        "pair_error.png",
+        "sliding_surface.png",
+        "snapshots_nominal_smc.png",
+        "steady_error.png",
+        "steady_max_error.png",
+    ]  # no snapshots of "zero"
     import imageio.v3 as iio
 
     frames = iio.imread(figure_run / "ep.gif")
@@ -104,8 +152,9 @@ def test_ray_backend_matches_local(tmp_path):
     local = _run(tmp_path / "local", "--noise-position", "0.2", "--disturbance", "2")
     ray.init(num_cpus=1, include_dashboard=False, log_to_driver=False)
     try:
-        remote = _run(tmp_path / "ray", "--noise-position", "0.2", "--disturbance", "2",
-                      "--backend", "ray")  # fmt: skip
+        remote = _run(
+            tmp_path / "ray", "--noise-position", "0.2", "--disturbance", "2", "--backend", "ray"
+        )
     finally:
         ray.shutdown()
     assert remote == local
@@ -117,8 +166,22 @@ def test_reproduce_is_the_paper_suite(tmp_path, capsys):
     from baselines import reproduce
 
     out = tmp_path / "r"
-    rc = reproduce.main(["--n-uavs", "8", "--horizon", "2", "--seeds", "1", "--workers", "1",
-                         "--no-figures", "--quiet", "--out", str(out)])  # fmt: skip
+    rc = reproduce.main(
+        [
+            "--n-uavs",
+            "8",
+            "--horizon",
+            "2",
+            "--seeds",
+            "1",
+            "--workers",
+            "1",
+            "--no-figures",
+            "--quiet",
+            "--out",
+            str(out),
+        ]
+    )
     assert rc == 0
     res = json.loads((out / "results.json").read_text())
     assert res["suite"] == "paper"
@@ -131,8 +194,25 @@ def test_reproduce_is_the_paper_suite(tmp_path, capsys):
 
 def test_three_d_scenario_draws_trajectories(tmp_path):
     out = tmp_path / "d3"
-    assert main([*TINY, "--dim", "3", "--seeds", "1", "-p", "smc", "--workers", "1",
-                 "--no-snapshots", "--out", str(out)]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                *TINY,
+                "--dim",
+                "3",
+                "--seeds",
+                "1",
+                "-p",
+                "smc",
+                "--workers",
+                "1",
+                "--no-snapshots",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert (out / "trajectories3d_nominal_smc.png").stat().st_size > 0
     assert "3,8,1," in (out / "results.csv").read_text().splitlines()[1]  # dim, N, pairs
 
@@ -165,8 +245,11 @@ def test_bad_input_names_argument_and_choices(args, words, tmp_path, capsys):
 
 def test_policy_specs():
     s = parse_policy("smc:k=200,boundary_layer=0.5")
-    assert (s.name, dict(s.gains), s.label) == ("smc", {"k": 200, "boundary_layer": 0.5},
-                                                "smc:k=200,boundary_layer=0.5")  # fmt: skip
+    assert (s.name, dict(s.gains), s.label) == (
+        "smc",
+        {"k": 200, "boundary_layer": 0.5},
+        "smc:k=200,boundary_layer=0.5",
+    )
     assert parse_policy("zero").gains == ()
     assert dict(parse_policy("smc:boundary_layer=none").gains) == {"boundary_layer": None}
     with pytest.raises(ValueError, match="expected key=value"):
@@ -192,8 +275,9 @@ def test_prefix_policies_take_their_argument_verbatim(monkeypatch, tmp_path):
     monkeypatch.chdir(tmp_path)
     assert parse_policy("fake:m.zip").name == f"fake:{model}"
     out = tmp_path / "o"
-    assert main([*TINY, "-p", "fake:m.zip", "--workers", "1", "--no-figures",
-                 "--out", str(out)]) == 0  # fmt: skip
+    assert (
+        main([*TINY, "-p", "fake:m.zip", "--workers", "1", "--no-figures", "--out", str(out)]) == 0
+    )
     assert seen["arg"] == str(model)
     assert "fake:m.zip" in (out / "results.csv").read_text()
 
@@ -201,9 +285,12 @@ def test_prefix_policies_take_their_argument_verbatim(monkeypatch, tmp_path):
 def test_scenario_specs_and_grid():
     assert parse_scenario("delay 5:partner_delay=5") == ("delay 5", {"partner_delay": 5})
     assert parse_scenario("pairs=[[0,1],[2,3]],init=random") == (
-        None, {"pairs": [[0, 1], [2, 3]], "init": "random"})  # fmt: skip
-    sc = expand_scenarios({"n_uavs": 50}, [("a", {"partner_delay": 2}), (None, {})],
-                          {"dt": [0.01, 0.005], "dim": [2]})  # fmt: skip
+        None,
+        {"pairs": [[0, 1], [2, 3]], "init": "random"},
+    )
+    sc = expand_scenarios(
+        {"n_uavs": 50}, [("a", {"partner_delay": 2}), (None, {})], {"dt": [0.01, 0.005], "dim": [2]}
+    )
     assert [s.label for s in sc] == ["a, dt=0.01", "a, dt=0.005", "dt=0.01", "dt=0.005"]
     assert sc[1].override_dict == {"n_uavs": 50, "partner_delay": 2, "dt": 0.005, "dim": 2}
     assert slug("N=50") == "n50" and slug("smc:k=200") == "smc-k200"
@@ -215,4 +302,3 @@ def test_replot_redraws_from_files(figure_run):
     png.unlink()
     assert main(["--replot", str(figure_run), "--no-snapshots"]) == 0
     assert png.stat().st_size > 0
-

@@ -21,18 +21,30 @@ def test_learned_policy_runs_next_to_the_analytic_ones(tmp_path):
 
     if "sb3:" not in POLICIES:
         pytest.skip("this install has no sb3: policies")
-    settings = settings_from_sources(dict(
-        env={"n_uavs": 8, "max_cycles": 50}, num_swarms=2, total_steps=64, eval_every=0,
-        checkpoint_every=0, eval_baselines=[], tensorboard=False,
-        hyperparameters={"n_steps": 16, "batch_size": 32, "n_epochs": 1,
-                         "policy_kwargs": {"net_arch": [8]}},
-    ))  # fmt: skip
+    settings = settings_from_sources(
+        dict(
+            env={"n_uavs": 8, "max_cycles": 50},
+            num_swarms=2,
+            total_steps=64,
+            eval_every=0,
+            checkpoint_every=0,
+            eval_baselines=[],
+            tensorboard=False,
+            hyperparameters={
+                "n_steps": 16,
+                "batch_size": 32,
+                "n_epochs": 1,
+                "policy_kwargs": {"net_arch": [8]},
+            },
+        )
+    )
     train_run.train(settings, tmp_path / "run", quiet=True)
     model = tmp_path / "run" / "final_model.zip"
     spec = f"sb3:{model}"
     out = tmp_path / "b"
-    assert main([*TINY, "-p", "smc", spec, "--workers", "1", "--no-figures",
-                 "--out", str(out)]) == 0  # fmt: skip
+    assert (
+        main([*TINY, "-p", "smc", spec, "--workers", "1", "--no-figures", "--out", str(out)]) == 0
+    )
     res = json.loads((out / "results.json").read_text())
     assert [p["label"] for p in res["policies"]] == ["smc", spec]
     runs = {(r["policy"], r["seed"]) for r in res["runs"]}

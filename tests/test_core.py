@@ -131,13 +131,22 @@ def test_step_before_reset_and_bad_actions_leave_state_unchanged(small_config):
         core.step(np.zeros((1, M, D)))
     core.reset(seed=0)
     core.step(np.zeros((1, M, D)))
-    snapshot = (core.q.copy(), core.p.copy(), core.t.copy(), core.observe(),
-                core.rngs[0].bit_generator.state)  # fmt: skip
+    snapshot = (
+        core.q.copy(),
+        core.p.copy(),
+        core.t.copy(),
+        core.observe(),
+        core.rngs[0].bit_generator.state,
+    )
     bad = np.zeros((1, M, D))
     bad[0, 1, 0] = np.nan
-    for a, exc in [(bad, ValueError), (np.zeros((1, M, D + 1)), ValueError),
-                   (np.zeros((1, M, D), dtype=bool), TypeError),
-                   (np.full((1, M, D), "x"), TypeError), (np.full((1, M, D), np.inf), ValueError)]:  # fmt: skip
+    for a, exc in [
+        (bad, ValueError),
+        (np.zeros((1, M, D + 1)), ValueError),
+        (np.zeros((1, M, D), dtype=bool), TypeError),
+        (np.full((1, M, D), "x"), TypeError),
+        (np.full((1, M, D), np.inf), ValueError),
+    ]:
         with pytest.raises(exc):
             core.step(a)
     assert np.array_equal(core.q, snapshot[0]) and np.array_equal(core.p, snapshot[1])
@@ -217,8 +226,10 @@ def test_partner_delay_shows_the_partners_old_state():
 
 def test_observation_noise_has_the_configured_spread():
     cfg = make_config("paper", n_uavs=6, obs_noise_position=0.2, obs_noise_velocity=0.05)
-    noisy, clean = PairFlockCore(cfg, num_envs=64), PairFlockCore(cfg.replace(
-        obs_noise_position=0.0, obs_noise_velocity=0.0), num_envs=64)  # fmt: skip
+    noisy, clean = (
+        PairFlockCore(cfg, num_envs=64),
+        PairFlockCore(cfg.replace(obs_noise_position=0.0, obs_noise_velocity=0.0), num_envs=64),
+    )
     rn, rc = noisy.reset(seed=3), clean.reset(seed=3)
     L = noisy.layout
     dq = L.get(rn.obs, "partner_offset") - L.get(rc.obs, "partner_offset")

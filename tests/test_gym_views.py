@@ -78,21 +78,23 @@ def test_vector_entry_point_equals_sync_vector_env(mode):
     """make_vec through the native vector_entry_point == SyncVectorEnv of single envs, across
     episode ends (auto-reset) in both autoreset modes."""
     kw = dict(SMALL, max_cycles=12)  # 12 control steps = 3 decisions of 5 (last one cut short)
-    native = gym.make_vec(ENV_ID, num_envs=3, vectorization_mode="vector_entry_point",
-                          autoreset_mode=mode, **kw)  # fmt: skip
+    native = gym.make_vec(
+        ENV_ID, num_envs=3, vectorization_mode="vector_entry_point", autoreset_mode=mode, **kw
+    )
     assert isinstance(native.unwrapped, PairFlockVectorEnv)
-    sync = gym.make_vec(ENV_ID, num_envs=3, vectorization_mode="sync",
-                        vector_kwargs={"autoreset_mode": mode}, **kw)  # fmt: skip
+    sync = gym.make_vec(
+        ENV_ID, num_envs=3, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}, **kw
+    )
     on, _ = native.reset(seed=11)
     os_, _ = sync.reset(seed=11)
     np.testing.assert_array_equal(on, os_)
     rng = np.random.default_rng(1)
-    acts = rng.uniform(-1, 1, (9,) + native.action_space.shape).astype(np.float32)
+    acts = rng.uniform(-1, 1, (9, *native.action_space.shape)).astype(np.float32)
     ended = 0
     for a in acts:
         rn = native.step(a)
         rs = sync.step(a)
-        for x, y in zip(rn[:4], rs[:4]):
+        for x, y in zip(rn[:4], rs[:4], strict=False):
             np.testing.assert_allclose(x, y, rtol=0, atol=1e-6)
         np.testing.assert_allclose(rn[4]["pair_error"], rs[4]["pair_error"], atol=1e-9)
         if mode == AutoresetMode.SAME_STEP and rn[3].any():
@@ -104,7 +106,7 @@ def test_vector_entry_point_equals_sync_vector_env(mode):
 
 def test_vector_env_reset_mask_and_bad_actions_leave_state_unchanged():
     v = PairFlockVectorEnv(num_envs=2, **SMALL)
-    obs, _ = v.reset(seed=[4, 5])
+    _obs, _ = v.reset(seed=[4, 5])
     q0 = v.core.q.copy()
     for bad, exc in [
         (np.full((2, 4), np.nan), ValueError),
@@ -137,7 +139,7 @@ def test_single_env_rejects_bad_input():
         gym.make(ENV_ID, frame="polar")
     with pytest.raises(ValueError, match="w_error"):
         gym.make(ENV_ID, frame_params={"w_error": -1.0})
-    with pytest.raises(ValueError, match="did you mean|Did you mean"):
+    with pytest.raises(ValueError, match=r"did you mean|Did you mean"):
         gym.make(ENV_ID, n_uav=20)
 
 
@@ -160,7 +162,9 @@ def test_pair_basis_is_orthonormal_and_flips_with_the_partner():
     for D in (2, 3):
         z = rng.normal(size=(50, D))
         R = pair_basis(z)
-        np.testing.assert_allclose(R @ np.swapaxes(R, -1, -2), np.broadcast_to(np.eye(D), R.shape), atol=1e-12)
+        np.testing.assert_allclose(
+            R @ np.swapaxes(R, -1, -2), np.broadcast_to(np.eye(D), R.shape), atol=1e-12
+        )
         np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-12)
         np.testing.assert_allclose(R[:, 0], z / np.linalg.norm(z, axis=1, keepdims=True))
         Rb = pair_basis(-z)
@@ -194,7 +198,9 @@ def test_feedforward_makes_the_pair_a_double_integrator():
     # axis: a box would allow sqrt(2) times more along a diagonal), direction kept
     ones = np.ones((2, 2))
     lay = itf.layout
-    raw = itf.params.accel_scale * np.einsum("mji,mj->mi", pair_basis(lay.get(res.obs[0], "partner_offset")), ones)
+    raw = itf.params.accel_scale * np.einsum(
+        "mji,mj->mi", pair_basis(lay.get(res.obs[0], "partner_offset")), ones
+    )
     raw += 0.5 * (lay.get(res.obs[0], "partner_flock_accel") - lay.get(res.obs[0], "flock_accel"))
     big = itf.decode(res.obs[0], ones)
     np.testing.assert_allclose(np.linalg.norm(big, axis=-1), 1.0, rtol=1e-12)
@@ -226,7 +232,9 @@ def test_interface_encoding_is_bounded_finite_and_symmetric():
     sl = itf.field_slices()
     # both members see the same pair error and the same relative velocity in their frames
     np.testing.assert_allclose(enc[:, 0, sl["error"]], enc[:, 1, sl["error"]], atol=1e-6)
-    np.testing.assert_allclose(enc[:, 0, sl["rel_velocity"]], enc[:, 1, sl["rel_velocity"]], atol=1e-6)
+    np.testing.assert_allclose(
+        enc[:, 0, sl["rel_velocity"]], enc[:, 1, sl["rel_velocity"]], atol=1e-6
+    )
     # neighbours are ranked by distance at closest approach
     miss = enc[..., sl["neighbor_miss"]]
     mask = enc[..., sl["neighbor_mask"]] > 0
@@ -243,8 +251,10 @@ def test_interface_encoding_is_bounded_finite_and_symmetric():
 
 
 def test_import_stays_light():
-    code = ("import sys, pairflock_env, gymnasium; gymnasium.spec('pairflock/PairFlock-v0'); "
-            "print('torch' in sys.modules, 'stable_baselines3' in sys.modules)")  # fmt: skip
+    code = (
+        "import sys, pairflock_env, gymnasium; gymnasium.spec('pairflock/PairFlock-v0'); "
+        "print('torch' in sys.modules, 'stable_baselines3' in sys.modules)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["False", "False"]
     assert pairflock_env.ENV_ID in gym.registry
@@ -256,10 +266,15 @@ def test_learning_views_fly_the_quadrotor():
     env = gym.make(ENV_ID, preset="paper-quadrotor", max_cycles=20)
     _check(env.unwrapped)
     assert env.action_space.shape == (2 * 3,)
-    envs = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="vector_entry_point",
-                        preset="paper-quadrotor", max_cycles=20)  # fmt: skip
+    envs = gym.make_vec(
+        ENV_ID,
+        num_envs=2,
+        vectorization_mode="vector_entry_point",
+        preset="paper-quadrotor",
+        max_cycles=20,
+    )
     obs, _ = envs.reset(seed=0)
     for _ in range(25):  # across an auto-reset
-        obs, r, term, trunc, info = envs.step(envs.action_space.sample())
+        obs, r, _term, _trunc, info = envs.step(envs.action_space.sample())
         assert np.isfinite(obs).all() and np.isfinite(r).all()
     assert not info["crashed"].any()

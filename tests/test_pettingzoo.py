@@ -62,13 +62,20 @@ def test_module_entry_points_and_docs():
 
 def _snapshot(env):
     c = env.core
-    return (c.q.copy(), c.p.copy(), c.t.copy(), c.steps.copy(), list(env.agents),
-            c.rngs[0].bit_generator.state)  # fmt: skip
+    return (
+        c.q.copy(),
+        c.p.copy(),
+        c.t.copy(),
+        c.steps.copy(),
+        list(env.agents),
+        c.rngs[0].bit_generator.state,
+    )
 
 
 def _same(a, b):
     return all(
-        (np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y) for x, y in zip(a, b)
+        (np.array_equal(x, y) if isinstance(x, np.ndarray) else x == y)
+        for x, y in zip(a, b, strict=False)
     )
 
 
@@ -125,8 +132,16 @@ def test_infos_hold_the_documented_keys(small_kwargs):
     env = parallel_env(**small_kwargs)
     cfg = env.config
     _, infos = env.reset(seed=0)
-    required = {"pair_distance", "pair_error", "sliding_surface", "min_separation", "sim_time",
-                "collisions", "velocity_mismatch", "largest_component"}  # fmt: skip
+    required = {
+        "pair_distance",
+        "pair_error",
+        "sliding_surface",
+        "min_separation",
+        "sim_time",
+        "collisions",
+        "velocity_mismatch",
+        "largest_component",
+    }
     for a in env.agents:
         assert required <= set(infos[a])
     i0 = infos["uav_0"]
@@ -137,7 +152,7 @@ def test_infos_hold_the_documented_keys(small_kwargs):
     # s = c (||y||^2 - d_m^2) + 2 y.y' with y' = 0 at rest
     assert i0["sliding_surface"] == pytest.approx(cfg.surface_slope * (dist**2 - d_m**2))
     assert i0["sim_time"] == 0.0
-    obs, *_ , infos = env.step({a: np.zeros(cfg.dim) for a in env.agents})
+    obs, *_, infos = env.step({a: np.zeros(cfg.dim) for a in env.agents})
     assert infos["uav_1"]["sim_time"] == pytest.approx(cfg.dt)
     np.testing.assert_allclose(
         env.layout.get(obs["uav_0"], "partner_offset"),

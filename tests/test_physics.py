@@ -13,13 +13,15 @@ from pairflock_env.flocking import FlockingParams, flocking_pass, pair_pass
 
 def brute_force_flocking(cfg, q, p, lq, lp, h):
     """Eqs. 13-19 summed pair by pair (slow, obviously right)."""
-    B, N, D = q.shape
+    B, N, _D = q.shape
     sigma2 = cfg.repulsion_sigma2
     acc = np.zeros_like(q)
     for b in range(B):
         for i in range(N):
-            a = h[b, i] * (cfg.pin_position_gain * (lq[b] - q[b, i])
-                           + cfg.pin_velocity_gain * (lp[b] - p[b, i]))  # fmt: skip
+            a = h[b, i] * (
+                cfg.pin_position_gain * (lq[b] - q[b, i])
+                + cfg.pin_velocity_gain * (lp[b] - p[b, i])
+            )
             for j in range(N):
                 if j == i:
                     continue
@@ -48,16 +50,18 @@ def test_flocking_sweep_matches_brute_force(dim):
     h[:, [0, 3, 7]] = 1.0
     partner = np.full(15, -1, np.int64)
     out = flocking_pass(FlockingParams(cfg), q, p, lq, lp, h, partner)
-    np.testing.assert_allclose(out["acc"], brute_force_flocking(cfg, q, p, lq, lp, h),
-                               rtol=1e-12, atol=1e-12)  # fmt: skip
+    np.testing.assert_allclose(
+        out["acc"], brute_force_flocking(cfg, q, p, lq, lp, h), rtol=1e-12, atol=1e-12
+    )
 
 
 def test_forces_sum_to_zero_without_pinning():
     rng = np.random.default_rng(2)
     cfg = make_config("paper", n_uavs=40, pinning=())
     q, p, lq, lp = _random_swarm(rng, 4, 40, 2, box=15.0)
-    out = flocking_pass(FlockingParams(cfg), q, p, lq, lp, np.zeros((4, 40)),
-                        np.full(40, -1, np.int64))  # fmt: skip
+    out = flocking_pass(
+        FlockingParams(cfg), q, p, lq, lp, np.zeros((4, 40)), np.full(40, -1, np.int64)
+    )
     assert np.abs(out["acc"]).max() > 1.0  # the swarm does interact
     np.testing.assert_allclose(out["acc"].sum(axis=1), 0.0, atol=1e-10)
 
@@ -79,6 +83,7 @@ def test_no_interaction_beyond_radius_and_balance_at_spacing():
     # at the spacing d attraction and repulsion cancel: only the consensus term is left
     a = acc_at(cfg.spacing)[0]
     np.testing.assert_allclose(a[0], cfg.consensus * (p[0, 1] - p[0, 0]), atol=1e-12)
+
     # closer than d pushes apart, farther pulls together (eq. 15)
     def position_term(dist):  # x-force on UAV 0 minus its consensus part (p_1x - p_0x = 1)
         return acc_at(dist)[0, 0, 0] - cfg.consensus * 1.0
@@ -131,7 +136,7 @@ def test_proximity_quantities_match_brute_force():
             others[[a, c]] = False
             expect = np.sum(nb[a] & nb[c] & others) + (2 if nb[a, c] else 0)
             assert pp["shared"][b, k] == expect
-        for m, (i, j) in enumerate(zip(agents, partners)):
+        for m, (i, j) in enumerate(zip(agents, partners, strict=False)):
             order = [x for x in np.argsort(d[b, i], kind="stable") if x not in (i, j)][:4]
             np.testing.assert_allclose(pp["nbr_pos"][b, m], q[b, order] - q[b, i])
             np.testing.assert_allclose(pp["nbr_vel"][b, m], p[b, order] - p[b, i])

@@ -74,7 +74,9 @@ def test_with_ideal_motors_the_attitude_loop_is_the_designed_second_order_system
     t = cfg.physics_dt * np.arange(1, n + 1)
     wn, zeta = cfg.quad_attitude_freq, cfg.quad_attitude_damping
     wd = wn * math.sqrt(1 - zeta**2)
-    ideal = 1 - np.exp(-zeta * wn * t) * (np.cos(wd * t) + zeta / math.sqrt(1 - zeta**2) * np.sin(wd * t))
+    ideal = 1 - np.exp(-zeta * wn * t) * (
+        np.cos(wd * t) + zeta / math.sqrt(1 - zeta**2) * np.sin(wd * t)
+    )
     np.testing.assert_allclose(pitch / math.atan(0.2 / G), ideal, atol=0.02)
 
 
@@ -89,8 +91,9 @@ def test_rigid_body_and_mixer_conventions():
     A = prm.mixer_matrix()
     f, *M = A @ T
     h = cfg.physics_dt
-    np.testing.assert_allclose(model.omega[0, 0], h * np.asarray(M) / prm.inertia, rtol=1e-9,
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        model.omega[0, 0], h * np.asarray(M) / prm.inertia, rtol=1e-9, atol=1e-12
+    )
     np.testing.assert_allclose(p[0, 0], [0.0, 0.0, h * (f / prm.mass - G)], atol=1e-9)
     # the mixer's rows are orthogonal: A^-1 = A^T diag(1 / row norms^2)
     inv = A.T / np.sum(A * A, axis=1)
@@ -103,10 +106,14 @@ def test_mixer_inverts_the_rotor_map_and_desaturates_thrust_before_attitude():
     A = prm.mixer_matrix()
     hover = cfg.quad_mass * G
     f = np.array([hover, 3.0 * hover, hover, 0.0])
-    M = np.array([[0.01, -0.02, 0.003],  # fits
-                  [0.05, 0.0, 0.0],  # too much thrust: the collective gives way
-                  [2.0, -1.0, 0.1],  # moments beyond the rotors: scaled, direction kept
-                  [0.0, 0.0, 0.0]])  # below idle thrust  # fmt: skip
+    M = np.array(
+        [
+            [0.01, -0.02, 0.003],  # fits
+            [0.05, 0.0, 0.0],  # too much thrust: the collective gives way
+            [2.0, -1.0, 0.1],  # moments beyond the rotors: scaled, direction kept
+            [0.0, 0.0, 0.0],
+        ]
+    )  # below idle thrust
     T, sat = prm.mix(f, M)
     assert sat.tolist() == [False, True, True, True]
     assert T.min() >= cfg.quad_motor_thrust_min - 1e-12
@@ -218,7 +225,7 @@ def test_hitting_the_ground_ends_the_episode_in_every_view():
     env = parallel_env(preset="paper-quadrotor", n_uavs=6, quad_ground_altitude=18.0)
     env.reset(seed=0)
     down = np.array([0.0, 0.0, -1.0])
-    for k in range(200):
+    for _ in range(200):
         _, _, terms, truncs, infos = env.step({"uav_0": down, "uav_1": np.zeros(3)})
         if any(terms.values()):
             break
@@ -271,8 +278,13 @@ def test_climb_and_turn_leader_matches_the_scenario():
 @pytest.mark.parametrize("dim", [2, 3])
 def test_leader_velocity_is_the_derivative_of_its_position(dim):
     v0 = (3.0, 4.0, -0.5)[:dim]
-    leader = ClimbAndTurnLeader(np.zeros(dim), np.array(v0), climb_time=5.0, level_time=3.0,
-                                turns=[(2.0, 4.0, 2.0), (6.5, 1.0, -1.0)])  # fmt: skip
+    leader = ClimbAndTurnLeader(
+        np.zeros(dim),
+        np.array(v0),
+        climb_time=5.0,
+        level_time=3.0,
+        turns=[(2.0, 4.0, 2.0), (6.5, 1.0, -1.0)],
+    )
     t = np.linspace(0.0, 10.0, 2001)
     h = 1e-5
     qp, _ = leader.state(t + h)
@@ -342,7 +354,9 @@ def test_quadrotor_overrides_and_preset():
 # --------------------------------------------------------------------------- SO(3)
 def test_so3_exp_hat_vee_and_euler_angles():
     rng = np.random.default_rng(1)
-    phi = np.concatenate([rng.normal(size=(50, 3)), 1e-7 * rng.normal(size=(5, 3)), np.zeros((1, 3))])
+    phi = np.concatenate(
+        [rng.normal(size=(50, 3)), 1e-7 * rng.normal(size=(5, 3)), np.zeros((1, 3))]
+    )
     R = so3_exp(phi)
     assert orthonormality_error(R).max() < 1e-14
     np.testing.assert_allclose(np.linalg.det(R), 1.0, atol=1e-14)
@@ -367,8 +381,24 @@ def test_experiment_cli_writes_table_csv_and_figures(tmp_path):
     from baselines.quadrotor_experiment import main
 
     out = tmp_path / "q"
-    rc = main(["--seeds", "2", "--horizon", "16", "--policies", "smc", "zero", "--workers", "1",
-               "--out", str(out), "--quiet", "--dpi", "40"])  # fmt: skip
+    rc = main(
+        [
+            "--seeds",
+            "2",
+            "--horizon",
+            "16",
+            "--policies",
+            "smc",
+            "zero",
+            "--workers",
+            "1",
+            "--out",
+            str(out),
+            "--quiet",
+            "--dpi",
+            "40",
+        ]
+    )
     assert rc == 0
     rows = list(csv.DictReader((out / "results.csv").open()))
     assert {(r["dynamics"], r["policy"]) for r in rows} == {
@@ -376,15 +406,36 @@ def test_experiment_cli_writes_table_csv_and_figures(tmp_path):
     }
     smc = [r for r in rows if r["dynamics"] == "quadrotor" and r["policy"] == "smc"]
     zero = [r for r in rows if r["dynamics"] == "quadrotor" and r["policy"] == "zero"]
-    assert all(float(a["straight_max_error"]) < float(b["straight_max_error"])
-               for a, b in zip(smc, zero))  # fmt: skip
+    assert all(
+        float(a["straight_max_error"]) < float(b["straight_max_error"])
+        for a, b in zip(smc, zero, strict=False)
+    )
     summary = (out / "summary.md").read_text()
     assert "| quadrotor | smc |" in summary and "Criteria" in summary
     for name in ("snapshots", "trajectories_3d", "sliding_surface", "pair_error", "euler_angles"):
         assert (out / f"{name}.png").stat().st_size > 1000
     # 4 s cannot show the criteria's windows: --check must fail rather than pass vacuously
-    assert main(["--seeds", "1", "--horizon", "4", "--policies", "smc", "--dynamics",
-                 "quadrotor", "--workers", "1", "--out", str(out / "c"), "--quiet",
-                 "--no-figures", "--check"]) == 1  # fmt: skip
+    assert (
+        main(
+            [
+                "--seeds",
+                "1",
+                "--horizon",
+                "4",
+                "--policies",
+                "smc",
+                "--dynamics",
+                "quadrotor",
+                "--workers",
+                "1",
+                "--out",
+                str(out / "c"),
+                "--quiet",
+                "--no-figures",
+                "--check",
+            ]
+        )
+        == 1
+    )
     with pytest.raises(SystemExit, match="quad_mass"):
         main(["--set", "quad_mass=-1", "--out", str(out / "bad"), "--quiet"])

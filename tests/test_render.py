@@ -52,7 +52,17 @@ def test_video_writer_checks_its_arguments(tmp_path):
         write_episode_video(tmp_path / "x.gif", t, pos, vel, lead, ((0, 1),), 5.0, fps=0)
     with pytest.raises(ValueError, match="t has 2 samples"):
         write_episode_video(tmp_path / "x.gif", t[:2], pos, vel, lead, ((0, 1),), 5.0)
-    path = write_episode_video(tmp_path / "ok.gif", t, pos, vel, lead, ((0, 1),), 5.0,
-                               fps=10, speed=1.0, size_px=(160, 160))  # fmt: skip
+    path = write_episode_video(
+        tmp_path / "ok.gif",
+        t,
+        pos,
+        vel,
+        lead,
+        ((0, 1),),
+        5.0,
+        fps=10,
+        speed=1.0,
+        size_px=(160, 160),
+    )
     assert path.read_bytes()[:3] == b"GIF"
     assert not list(tmp_path.glob(".*"))  # no temporary file left behind

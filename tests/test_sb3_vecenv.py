@@ -7,14 +7,14 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
-import gymnasium as gym  # noqa: E402
-from stable_baselines3 import PPO  # noqa: E402
-from stable_baselines3.common.vec_env import DummyVecEnv, VecCheckNan, VecMonitor  # noqa: E402
+import gymnasium as gym
+from stable_baselines3 import PPO
+from stable_baselines3.common.vec_env import DummyVecEnv, VecCheckNan, VecMonitor
 
-from baselines import make_pair_policy  # noqa: E402
-from baselines.rollout import rollout, trace_metrics  # noqa: E402
-from pairflock_env import ENV_ID, make_config, parallel_env  # noqa: E402
-from pairflock_env.envs import PairFlockVecEnv  # noqa: E402
+from baselines import make_pair_policy
+from baselines.rollout import rollout, trace_metrics
+from pairflock_env import ENV_ID, make_config, parallel_env
+from pairflock_env.envs import PairFlockVecEnv
 
 SMALL = dict(n_uavs=12, pair_accel_limit=50.0)
 
@@ -97,8 +97,11 @@ def test_attributes_methods_and_bad_actions():
     assert env.env_is_wrapped(gym.Wrapper) == [False] * 4
     assert env.has_attr("partner") and not env.has_attr("nope")
     q0 = env.core.q.copy()
-    for bad, exc in [(np.full((4, 2), np.inf), ValueError), (np.zeros((2, 2)), ValueError),
-                     (np.array([["x", "y"]] * 4), TypeError)]:  # fmt: skip
+    for bad, exc in [
+        (np.full((4, 2), np.inf), ValueError),
+        (np.zeros((2, 2)), ValueError),
+        (np.array([["x", "y"]] * 4), TypeError),
+    ]:
         with pytest.raises(exc, match="actions"):
             env.step(bad)
         np.testing.assert_array_equal(env.core.q, q0)
@@ -117,7 +120,7 @@ def test_state_snapshot_continues_identically():
     first = [env.step(a) for _ in range(6)]
     env.set_state(snap)
     again = [env.step(a) for _ in range(6)]
-    for x, y in zip(first, again):
+    for x, y in zip(first, again, strict=False):
         np.testing.assert_array_equal(x[0], y[0])
         np.testing.assert_array_equal(x[1], y[1])
         np.testing.assert_array_equal(x[2], y[2])
@@ -126,12 +129,14 @@ def test_state_snapshot_continues_identically():
 
 
 def test_sb3_wrappers_and_ppo_train_on_native_vecenv():
-    env = VecCheckNan(VecMonitor(PairFlockVecEnv(num_swarms=2, max_cycles=30, info_keys="all",
-                                                 **SMALL)), raise_exception=True)  # fmt: skip
+    env = VecCheckNan(
+        VecMonitor(PairFlockVecEnv(num_swarms=2, max_cycles=30, info_keys="all", **SMALL)),
+        raise_exception=True,
+    )
     model = PPO("MlpPolicy", env, n_steps=16, batch_size=32, n_epochs=1, seed=0, device="cpu")
     model.learn(128)
     assert model.num_timesteps == 128
-    obs, r, d, infos = env.step(np.zeros((4, 2), np.float32))
+    _obs, _r, _d, infos = env.step(np.zeros((4, 2), np.float32))
     assert "pair_error" in infos[0] and "sim_time" in infos[0]
 
 
@@ -149,13 +154,13 @@ def test_sb3_loader_in_the_action_slot(tmp_path):
     pol = make_pair_policy(f"sb3:{path}", cfg)
     pz = parallel_env(config=cfg)
     obs, _ = pz.reset(seed=0)
-    act, state = pol.predict(obs["uav_0"])
+    act, _state = pol.predict(obs["uav_0"])
     assert act.shape == (2,) and act.dtype == np.float32 and np.all(np.abs(act) <= 1.0)
     batch = np.stack([obs["uav_0"], obs["uav_1"]])
-    a1, st = pol.predict(batch, episode_start=np.ones(2, bool))
+    _, st = pol.predict(batch, episode_start=np.ones(2, bool))
     held = st[0].copy()
     for _ in range(4):  # decisions are held for 5 calls when the state is passed back
-        a1, st = pol.predict(batch, state=st, episode_start=np.zeros(2, bool))
+        _a1, st = pol.predict(batch, state=st, episode_start=np.zeros(2, bool))
         np.testing.assert_array_equal(st[0], held)
     rows = trace_metrics(rollout(cfg, pol, [0, 1]))
     assert len(rows) == 2 and np.isfinite(rows[0]["ss_mean_error"])

@@ -24,27 +24,60 @@ ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
 
 #: a tiny task: 8-UAV swarms, 1-s training episodes, 0.5-s evaluation on one seed
-TINY = ["--set", "n_uavs=8", "--set", "pair_accel_limit=50", "--set", "max_cycles=100",
-        "--eval-set", "horizon=0.5", "--eval-seeds", "1000", "--num-swarms", "2",
-        "--hp", "n_steps=16", "--hp", "batch_size=32", "--hp", "n_epochs=2",
-        "--hp", "policy_kwargs.net_arch=[16,16]"]  # fmt: skip
+TINY = [
+    "--set",
+    "n_uavs=8",
+    "--set",
+    "pair_accel_limit=50",
+    "--set",
+    "max_cycles=100",
+    "--eval-set",
+    "horizon=0.5",
+    "--eval-seeds",
+    "1000",
+    "--num-swarms",
+    "2",
+    "--hp",
+    "n_steps=16",
+    "--hp",
+    "batch_size=32",
+    "--hp",
+    "n_epochs=2",
+    "--hp",
+    "policy_kwargs.net_arch=[16,16]",
+]
 
 
 def _cli(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "train", *args], cwd=ROOT, env=ENV,
-                          capture_output=True, text=True, timeout=timeout)  # fmt: skip
+    return subprocess.run(
+        [sys.executable, "-m", "train", *args],
+        cwd=ROOT,
+        env=ENV,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
 
 
 def _settings(**flags):
     from train.settings import settings_from_sources
 
-    base = dict(env={"n_uavs": 8, "pair_accel_limit": 50.0, "max_cycles": 100},
-                eval_env={"horizon": 0.5}, eval_seeds=[1000], num_swarms=2,
-                eval_baselines=["smc"], tensorboard=False)  # fmt: skip
+    base = dict(
+        env={"n_uavs": 8, "pair_accel_limit": 50.0, "max_cycles": 100},
+        eval_env={"horizon": 0.5},
+        eval_seeds=[1000],
+        num_swarms=2,
+        eval_baselines=["smc"],
+        tensorboard=False,
+    )
     hp = dict(n_steps=16, batch_size=32, n_epochs=2, policy_kwargs={"net_arch": [16, 16]})
     if flags.get("algo") in ("sac", "td3"):
-        hp = dict(buffer_size=2000, learning_starts=64, batch_size=32,
-                  policy_kwargs={"net_arch": [16, 16]})  # fmt: skip
+        hp = dict(
+            buffer_size=2000,
+            learning_starts=64,
+            batch_size=32,
+            policy_kwargs={"net_arch": [16, 16]},
+        )
     base["hyperparameters"] = {**hp, **flags.pop("hyperparameters", {})}
     base.update(flags)
     return settings_from_sources(base)
@@ -87,23 +120,62 @@ def _curve(run: Path) -> list[dict]:
 def test_help_documents_every_cli():
     out = _cli("--help")
     assert out.returncode == 0
-    for flag in ("--algo", "--config", "--set", "--hp", "--total-steps", "--seed", "--out",
-                 "--resume", "--eval-every", "--checkpoint-every", "--time-limit", "Ctrl-C"):  # fmt: skip
+    for flag in (
+        "--algo",
+        "--config",
+        "--set",
+        "--hp",
+        "--total-steps",
+        "--seed",
+        "--out",
+        "--resume",
+        "--eval-every",
+        "--checkpoint-every",
+        "--time-limit",
+        "Ctrl-C",
+    ):
         assert flag in out.stdout, flag
     for mod in ("train.evaluate", "train.throughput"):
-        r = subprocess.run([sys.executable, "-m", mod, "--help"], cwd=ROOT, env=ENV,
-                           capture_output=True, text=True, timeout=60)  # fmt: skip
+        r = subprocess.run(
+            [sys.executable, "-m", mod, "--help"],
+            cwd=ROOT,
+            env=ENV,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
         assert r.returncode == 0 and "usage:" in r.stdout
 
 
 def test_cli_smoke_run_writes_a_complete_run_directory(tmp_path):
     out = tmp_path / "run"
-    r = _cli(*TINY, "--total-steps", "256", "--eval-every", "128", "--checkpoint-every", "128",
-             "--eval-baselines", "smc", "--seed", "3", "--out", str(out), "--quiet")  # fmt: skip
+    r = _cli(
+        *TINY,
+        "--total-steps",
+        "256",
+        "--eval-every",
+        "128",
+        "--checkpoint-every",
+        "128",
+        "--eval-baselines",
+        "smc",
+        "--seed",
+        "3",
+        "--out",
+        str(out),
+        "--quiet",
+    )
     assert r.returncode == 0, r.stderr[-2000:]
     assert "completed: 256 steps" in r.stderr
-    for name in ("settings.yaml", "run.json", "eval.csv", "eval_baselines.json", "best_model.zip",
-                 "final_model.zip", "checkpoints/latest"):  # fmt: skip
+    for name in (
+        "settings.yaml",
+        "run.json",
+        "eval.csv",
+        "eval_baselines.json",
+        "best_model.zip",
+        "final_model.zip",
+        "checkpoints/latest",
+    ):
         assert (out / name).is_file(), name
     assert list((out / "tensorboard").iterdir()), "tensorboard events"
     rec = json.loads((out / "run.json").read_text())
@@ -153,8 +225,14 @@ def test_resume_continues_exactly(tmp_path, algo):
     from train.run import train
 
     total, every = (512, 256) if algo == "ppo" else (192, 96)
-    s = _settings(algo=algo, seed=1, total_steps=total, eval_every=0, checkpoint_every=every,
-                  keep_checkpoints=0)  # fmt: skip
+    s = _settings(
+        algo=algo,
+        seed=1,
+        total_steps=total,
+        eval_every=0,
+        checkpoint_every=every,
+        keep_checkpoints=0,
+    )
     full = tmp_path / "full"
     train(s, full, quiet=True)
     ckpts = sorted((full / "checkpoints").glob("step_*"))
@@ -186,10 +264,27 @@ def test_resume_continues_exactly(tmp_path, algo):
 
 def test_ctrl_c_saves_a_checkpoint_and_exits_cleanly(tmp_path):
     out = tmp_path / "run"
-    p = subprocess.Popen([sys.executable, "-m", "train", *TINY, "--total-steps", "1e9",
-                          "--eval-every", "0", "--eval-baselines", "--out", str(out), "--quiet"],
-                         cwd=ROOT, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True)  # fmt: skip
+    p = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "train",
+            *TINY,
+            "--total-steps",
+            "1e9",
+            "--eval-every",
+            "0",
+            "--eval-baselines",
+            "--out",
+            str(out),
+            "--quiet",
+        ],
+        cwd=ROOT,
+        env=ENV,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         deadline = time.time() + 90
         while time.time() < deadline and not list((out / "logs").glob("progress_*.csv")):
@@ -258,9 +353,29 @@ def test_throughput_script_trains_on_both_routes(tmp_path):
     from train.throughput import main
 
     out = tmp_path / "throughput.json"
-    assert main(["--steps", "64", "--env-steps", "64", "--repeats", "1", "--num-swarms", "2",
-                 "--n-uavs", "6", "--hp", "n_steps=16", "--hp", "batch_size=32",
-                 "--out", str(out)]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "--steps",
+                "64",
+                "--env-steps",
+                "64",
+                "--repeats",
+                "1",
+                "--num-swarms",
+                "2",
+                "--n-uavs",
+                "6",
+                "--hp",
+                "n_steps=16",
+                "--hp",
+                "batch_size=32",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     rec = json.loads(out.read_text())
     for route in ("native", "supersuit"):
         assert all(v > 0 for v in rec["median"][route].values()), route

@@ -7,6 +7,6 @@ import sys
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("MKL_NUM_THREADS", "1")
 
-from train.cli import main  # noqa: E402
+from train.cli import main
 
 sys.exit(main())

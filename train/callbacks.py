@@ -20,13 +20,13 @@ import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
 __all__ = [
-    "ProgressCallback",
-    "EvalCallback",
     "CheckpointCallback",
-    "StopCallback",
+    "EvalCallback",
     "GracefulInterrupt",
-    "summarize_metrics",
+    "ProgressCallback",
+    "StopCallback",
     "eval_score",
+    "summarize_metrics",
 ]
 
 #: summary statistics logged per evaluation: name -> (metric, reduction)
@@ -131,14 +131,21 @@ class ProgressCallback(BaseCallback):
         self.postfix: dict[str, str] = {}
 
     def _on_training_start(self) -> None:
-        from tqdm import tqdm
-
         import sys
 
+        from tqdm import tqdm
+
         interval = 0.2 if sys.stderr.isatty() else 30.0  # log files get a line every 30 s
-        self.bar = tqdm(total=self.total, initial=self.num_timesteps, unit="step",
-                        unit_scale=True, desc="train", disable=self.disable, smoothing=0.05,
-                        mininterval=interval)  # fmt: skip
+        self.bar = tqdm(
+            total=self.total,
+            initial=self.num_timesteps,
+            unit="step",
+            unit_scale=True,
+            desc="train",
+            disable=self.disable,
+            smoothing=0.05,
+            mininterval=interval,
+        )
 
     def _on_step(self) -> bool:
         if self.bar is not None:

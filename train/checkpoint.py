@@ -55,9 +55,7 @@ def set_rng_state(model: Any, state: dict[str, Any]) -> None:
     model.action_space.np_random.bit_generator.state = state["action_space"]
 
 
-def save_checkpoint(
-    root: Path, model: Any, venv: Any, extra: dict[str, Any], keep: int
-) -> Path:
+def save_checkpoint(root: Path, model: Any, venv: Any, extra: dict[str, Any], keep: int) -> Path:
     """Write checkpoint ``root/step_<N>`` (N = model.num_timesteps) atomically; keep the
     newest ``keep`` checkpoints (0 keeps all)."""
     from baselines.io import atomic_write_text, write_json
@@ -80,14 +78,16 @@ def save_checkpoint(
         state = {
             "num_timesteps": step,
             "env": venv.unwrapped.get_state(),
-            "monitor": None if monitor is None else {
+            "monitor": None
+            if monitor is None
+            else {
                 "episode_returns": monitor.episode_returns.copy(),
                 "episode_lengths": monitor.episode_lengths.copy(),
                 "episode_count": monitor.episode_count,
             },
             "rng": rng_state(model),
             **extra,
-        }  # fmt: skip
+        }
         with open(tmp / "state.pkl", "wb") as f:
             pickle.dump(state, f, protocol=pickle.HIGHEST_PROTOCOL)
         write_json(tmp / "checkpoint.json", {"num_timesteps": step, "files": files})

@@ -83,49 +83,98 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     g = p.add_argument_group("task")
-    g.add_argument("--config", type=Path, metavar="YAML",
-                   help="settings file (keys of train.settings.RunSettings); flags override it")
+    g.add_argument(
+        "--config",
+        type=Path,
+        metavar="YAML",
+        help="settings file (keys of train.settings.RunSettings); flags override it",
+    )
     g.add_argument("--algo", choices=ALGOS, help="algorithm (default: ppo)")
     g.add_argument("--preset", help="pairflock_env preset (default: paper)")
     g.add_argument("--dynamics", help="vehicle model, e.g. particle (default: the preset's)")
-    g.add_argument("--set", dest="env_sets", action="append", default=[], metavar="FIELD=VALUE",
-                   help="PairFlockConfig override of the training task, repeatable "
-                   "(e.g. --set n_uavs=20 --set pair_accel_limit=50 --set max_cycles=2000)")
-    g.add_argument("--eval-set", dest="eval_sets", action="append", default=[],
-                   metavar="FIELD=VALUE", help="override applied on top for evaluation only "
-                   "(e.g. --eval-set horizon=50)")
-    g.add_argument("--num-swarms", type=int, help="swarms simulated side by side (default: 32); "
-                   "SB3 sees num_swarms x paired UAVs rows")
+    g.add_argument(
+        "--set",
+        dest="env_sets",
+        action="append",
+        default=[],
+        metavar="FIELD=VALUE",
+        help="PairFlockConfig override of the training task, repeatable "
+        "(e.g. --set n_uavs=20 --set pair_accel_limit=50 --set max_cycles=2000)",
+    )
+    g.add_argument(
+        "--eval-set",
+        dest="eval_sets",
+        action="append",
+        default=[],
+        metavar="FIELD=VALUE",
+        help="override applied on top for evaluation only (e.g. --eval-set horizon=50)",
+    )
+    g.add_argument(
+        "--num-swarms",
+        type=int,
+        help="swarms simulated side by side (default: 32); SB3 sees num_swarms x paired UAVs rows",
+    )
     g = p.add_argument_group("learning interface")
-    g.add_argument("--frame", choices=("pair", "world"),
-                   help="what the policy sees and outputs (default: pair; see "
-                   "pairflock_env.learning)")
-    g.add_argument("--frame-param", dest="frame_sets", action="append", default=[],
-                   metavar="NAME=VALUE", help="PairFrameParams field, repeatable "
-                   "(e.g. --frame-param w_separation=2)")
+    g.add_argument(
+        "--frame",
+        choices=("pair", "world"),
+        help="what the policy sees and outputs (default: pair; see pairflock_env.learning)",
+    )
+    g.add_argument(
+        "--frame-param",
+        dest="frame_sets",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="PairFrameParams field, repeatable (e.g. --frame-param w_separation=2)",
+    )
     g = p.add_argument_group("algorithm")
-    g.add_argument("--total-steps", type=_int_like,
-                   help="environment steps (rows x vector steps) to train for, e.g. 2e7")
+    g.add_argument(
+        "--total-steps",
+        type=_int_like,
+        help="environment steps (rows x vector steps) to train for, e.g. 2e7",
+    )
     g.add_argument("--seed", type=int, help="seed of the model, the swarms and SB3 (default: 0)")
-    g.add_argument("--hp", dest="hp_sets", action="append", default=[], metavar="NAME=VALUE",
-                   help="SB3 hyperparameter, value parsed as YAML, repeatable; nested with dots "
-                   "(e.g. --hp learning_rate=1e-3 --hp policy_kwargs.net_arch=[64,64])")
+    g.add_argument(
+        "--hp",
+        dest="hp_sets",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="SB3 hyperparameter, value parsed as YAML, repeatable; nested with dots "
+        "(e.g. --hp learning_rate=1e-3 --hp policy_kwargs.net_arch=[64,64])",
+    )
     g = p.add_argument_group("schedule and output")
     g.add_argument("--out", type=Path, help="run directory (required unless --resume)")
     g.add_argument("--overwrite", action="store_true", help="replace a non-empty --out")
-    g.add_argument("--resume", type=Path, metavar="PATH",
-                   help="continue a run: its directory or a checkpoints/step_<N> directory; "
-                   "only --total-steps, --time-limit and --quiet may change")
+    g.add_argument(
+        "--resume",
+        type=Path,
+        metavar="PATH",
+        help="continue a run: its directory or a checkpoints/step_<N> directory; "
+        "only --total-steps, --time-limit and --quiet may change",
+    )
     g.add_argument("--eval-every", type=_int_like, help="steps between evaluations (0: none)")
-    g.add_argument("--eval-seeds", type=_seed_list, metavar="SEEDS",
-                   help="evaluation seeds, e.g. 1000-1009 (default)")
-    g.add_argument("--eval-baselines", nargs="*", metavar="NAME",
-                   help="analytic controllers evaluated once for comparison (default: smc "
-                   "proportional)")
+    g.add_argument(
+        "--eval-seeds",
+        type=_seed_list,
+        metavar="SEEDS",
+        help="evaluation seeds, e.g. 1000-1009 (default)",
+    )
+    g.add_argument(
+        "--eval-baselines",
+        nargs="*",
+        metavar="NAME",
+        help="analytic controllers evaluated once for comparison (default: smc proportional)",
+    )
     g.add_argument("--checkpoint-every", type=_int_like, help="steps between checkpoints (0: none)")
     g.add_argument("--keep-checkpoints", type=int, help="newest checkpoints kept (0: all)")
-    g.add_argument("--time-limit", type=float, metavar="MIN",
-                   help="stop cleanly (checkpoint, final model) after this many minutes")
+    g.add_argument(
+        "--time-limit",
+        type=float,
+        metavar="MIN",
+        help="stop cleanly (checkpoint, final model) after this many minutes",
+    )
     g.add_argument("--no-tensorboard", action="store_true", help="CSV log only")
     g.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
@@ -158,15 +207,31 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser, interrupt) 
     from .settings import load_yaml, settings_from_sources
 
     if args.resume is not None:
-        changing = [name for name in ("config", "algo", "preset", "dynamics", "num_swarms", "frame",
-                                      "seed", "eval_every", "eval_seeds", "eval_baselines",
-                                      "checkpoint_every", "keep_checkpoints")
-                    if getattr(args, name) is not None]  # fmt: skip
-        changing += [f for f in ("env_sets", "eval_sets", "frame_sets", "hp_sets")
-                     if getattr(args, f)]  # fmt: skip
+        changing = [
+            name
+            for name in (
+                "config",
+                "algo",
+                "preset",
+                "dynamics",
+                "num_swarms",
+                "frame",
+                "seed",
+                "eval_every",
+                "eval_seeds",
+                "eval_baselines",
+                "checkpoint_every",
+                "keep_checkpoints",
+            )
+            if getattr(args, name) is not None
+        ]
+        changing += [
+            f for f in ("env_sets", "eval_sets", "frame_sets", "hp_sets") if getattr(args, f)
+        ]
         if changing or args.overwrite or args.no_tensorboard:
             raise ValueError(
-                f"--resume continues a run as it was set up; it cannot change {changing or '--overwrite'} "
+                "--resume continues a run as it was set up; it cannot change "
+                f"{changing or '--overwrite'} "
                 "(only --total-steps, --time-limit and --quiet)"
             )
         from .checkpoint import latest_checkpoint
@@ -174,7 +239,9 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser, interrupt) 
         ckpt = latest_checkpoint(args.resume)
         run_dir = ckpt.parent.parent
         if args.out is not None and Path(args.out).resolve() != run_dir.resolve():
-            raise ValueError(f"--out {str(args.out)!r} differs from the resumed run {str(run_dir)!r}")
+            raise ValueError(
+                f"--out {str(args.out)!r} differs from the resumed run {str(run_dir)!r}"
+            )
         data = load_yaml(run_dir / "settings.yaml")
         flags = {"total_steps": args.total_steps, "time_limit": args.time_limit}
         settings = settings_from_sources(data, flags)
@@ -186,33 +253,50 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser, interrupt) 
         env_sets = _parse_sets(args.env_sets, "--set")
         eval_sets = _parse_sets(args.eval_sets, "--eval-set")
         flags = {
-            "algo": args.algo, "preset": args.preset, "dynamics": args.dynamics,
-            "frame": args.frame, "num_swarms": args.num_swarms,
-            "total_steps": args.total_steps, "seed": args.seed,
-            "eval_every": args.eval_every, "eval_seeds": args.eval_seeds,
+            "algo": args.algo,
+            "preset": args.preset,
+            "dynamics": args.dynamics,
+            "frame": args.frame,
+            "num_swarms": args.num_swarms,
+            "total_steps": args.total_steps,
+            "seed": args.seed,
+            "eval_every": args.eval_every,
+            "eval_seeds": args.eval_seeds,
             "eval_baselines": args.eval_baselines,
-            "checkpoint_every": args.checkpoint_every, "keep_checkpoints": args.keep_checkpoints,
+            "checkpoint_every": args.checkpoint_every,
+            "keep_checkpoints": args.keep_checkpoints,
             "time_limit": args.time_limit,
             "tensorboard": False if args.no_tensorboard else None,
-        }  # fmt: skip
+        }
         if eval_sets:
             base = dict((data or {}).get("eval_env", {}))
             base.update(dict(eval_sets))
             flags["eval_env"] = base
         settings = settings_from_sources(
-            data, flags, env_sets=env_sets, hp_sets=_parse_sets(args.hp_sets, "--hp"),
+            data,
+            flags,
+            env_sets=env_sets,
+            hp_sets=_parse_sets(args.hp_sets, "--hp"),
             frame_sets=_parse_sets(args.frame_sets, "--frame-param"),
-        )  # fmt: skip
+        )
         out = args.out
-    result = train(settings, out, resume=args.resume, quiet=args.quiet, overwrite=args.overwrite,
-                   interrupt=interrupt)
+    result = train(
+        settings,
+        out,
+        resume=args.resume,
+        quiet=args.quiet,
+        overwrite=args.overwrite,
+        interrupt=interrupt,
+    )
     s = result.final_summary
     msg = f"{result.status}: {result.num_timesteps} steps in {result.wall_s / 60:.1f} min -> {out}"
     if s:
-        msg += (f"\nevaluation on seeds {settings.eval_seeds[0]}-{settings.eval_seeds[-1]}: "
-                f"steady error median {s['ss_error_median']:.3f} m, max {s['ss_error_max']:.3f} m; "
-                f"0.5 m band by {s['band_time_max']:.2f} s; min pair-other distance "
-                f"{s['min_separation_min']:.2f} m")  # fmt: skip
+        msg += (
+            f"\nevaluation on seeds {settings.eval_seeds[0]}-{settings.eval_seeds[-1]}: "
+            f"steady error median {s['ss_error_median']:.3f} m, max {s['ss_error_max']:.3f} m; "
+            f"0.5 m band by {s['band_time_max']:.2f} s; min pair-other distance "
+            f"{s['min_separation_min']:.2f} m"
+        )
     print(msg, file=sys.stderr if args.quiet else sys.stdout)
     return 130 if result.interrupted else 0
 

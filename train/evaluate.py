@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["main", "run_job", "summary_table", "acceptance"]
+__all__ = ["acceptance", "main", "run_job", "summary_table"]
 
 #: (metric, column title, format) of the summary table
 COLUMNS = (
@@ -53,8 +53,9 @@ def _task_overrides(model_path: Path) -> tuple[str, dict[str, Any]]:
     return s.preset, s.eval_overrides()
 
 
-def run_job(model_path: str, policy: str, n_uavs: int, init: str, seeds: list[int],
-            extra: dict[str, Any]) -> list[dict[str, Any]]:  # fmt: skip
+def run_job(
+    model_path: str, policy: str, n_uavs: int, init: str, seeds: list[int], extra: dict[str, Any]
+) -> list[dict[str, Any]]:
     """Metrics per seed of one (policy, N, init) combination."""
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     try:
@@ -78,9 +79,17 @@ def run_job(model_path: str, policy: str, n_uavs: int, init: str, seeds: list[in
     t0 = time.perf_counter()
     rows = trace_metrics(rollout(cfg, pol, seeds))
     wall = time.perf_counter() - t0
-    return [{"n_uavs": n_uavs, "init": init, "policy": label,
-             "pair_accel_limit": cfg.pair_accel_limit, "wall_s": round(wall, 2), **r}
-            for r in rows]  # fmt: skip
+    return [
+        {
+            "n_uavs": n_uavs,
+            "init": init,
+            "policy": label,
+            "pair_accel_limit": cfg.pair_accel_limit,
+            "wall_s": round(wall, 2),
+            **r,
+        }
+        for r in rows
+    ]
 
 
 def summary_table(rows: list[dict[str, Any]], policies: list[str]) -> str:
@@ -101,8 +110,10 @@ def summary_table(rows: list[dict[str, Any]], policies: list[str]) -> str:
 
 
 def acceptance(rows: list[dict[str, Any]], n_uavs: int = 20, init: str = "corners"):
-    """The issue's targets for the learned policy at (N, init): list of (criterion, ok, measured)."""
-    sel = [r for r in rows if r["policy"] == "learned" and r["n_uavs"] == n_uavs and r["init"] == init]
+    """The targets for the learned policy at (N, init): list of (criterion, ok, measured)."""
+    sel = [
+        r for r in rows if r["policy"] == "learned" and r["n_uavs"] == n_uavs and r["init"] == init
+    ]
     if not sel:
         return []
     e = np.array([r["ss_mean_error"] for r in sel])
@@ -110,15 +121,28 @@ def acceptance(rows: list[dict[str, Any]], n_uavs: int = 20, init: str = "corner
     s = np.array([r["min_pair_separation"] for r in sel])
     band_ok = bool(np.all(np.isfinite(b)) and np.all(b <= 6.0))
     return [
-        (f"N={n_uavs} {init}: median steady-state abs error <= 0.05 m", bool(np.median(e) <= 0.05),
-         f"{np.median(e):.4f} m"),
+        (
+            f"N={n_uavs} {init}: median steady-state abs error <= 0.05 m",
+            bool(np.median(e) <= 0.05),
+            f"{np.median(e):.4f} m",
+        ),
         (f"N={n_uavs} {init}: no seed above 0.1 m", bool(np.all(e <= 0.1)), f"max {e.max():.4f} m"),
-        (f"N={n_uavs} {init}: 0.5 m band within 6 s on every seed", band_ok,
-         f"max {np.nanmax(b) if np.isfinite(b).any() else math.nan:.2f} s"
-         + (f", never on {int(np.sum(~np.isfinite(b)))} seeds" if not np.all(np.isfinite(b)) else "")),
-        (f"N={n_uavs} {init}: min pair-to-other distance >= 1 m on every seed (aim)",
-         bool(np.all(s >= 1.0)), f"min {s.min():.2f} m; {int(np.sum(s < 1.0))}/{len(s)} seeds below"),
-    ]  # fmt: skip
+        (
+            f"N={n_uavs} {init}: 0.5 m band within 6 s on every seed",
+            band_ok,
+            f"max {np.nanmax(b) if np.isfinite(b).any() else math.nan:.2f} s"
+            + (
+                f", never on {int(np.sum(~np.isfinite(b)))} seeds"
+                if not np.all(np.isfinite(b))
+                else ""
+            ),
+        ),
+        (
+            f"N={n_uavs} {init}: min pair-to-other distance >= 1 m on every seed (aim)",
+            bool(np.all(s >= 1.0)),
+            f"min {s.min():.2f} m; {int(np.sum(s < 1.0))}/{len(s)} seeds below",
+        ),
+    ]
 
 
 def _verdict(criterion: str, ok: bool) -> str:
@@ -137,22 +161,49 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("model", type=Path, help="model zip written by python -m train")
     p.add_argument("--n-uavs", type=int, nargs="+", default=[20], help="swarm sizes (default 20)")
-    p.add_argument("--init", nargs="+", default=["corners"], choices=("corners", "random"),
-                   help="pair start: the paper's corners and/or random (default corners)")
+    p.add_argument(
+        "--init",
+        nargs="+",
+        default=["corners"],
+        choices=("corners", "random"),
+        help="pair start: the paper's corners and/or random (default corners)",
+    )
     p.add_argument("--seeds", type=int, default=10, help="seeds per setting (default 10)")
-    p.add_argument("--first-seed", type=int, default=10_000,
-                   help="held-out seeds are first-seed, first-seed+1, ... (default 10000; "
-                   "training evaluates on 1000-1009 and trains on SeedSequence children)")
-    p.add_argument("--baselines", nargs="*", default=["smc", "smc@1000", "proportional"],
-                   help="analytic controllers for comparison (default: smc smc@1000 proportional)")
-    p.add_argument("--set", dest="sets", action="append", default=[], metavar="FIELD=VALUE",
-                   help="extra PairFlockConfig override for every run")
-    p.add_argument("--out", type=Path, default=None,
-                   help="output folder (default results/eval_<model name>)")
-    p.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1),
-                   help="worker processes (default 2; 1 runs here)")
-    p.add_argument("--check", action="store_true",
-                   help="exit status 1 unless the learned policy meets the N=20 corners targets")
+    p.add_argument(
+        "--first-seed",
+        type=int,
+        default=10_000,
+        help="held-out seeds are first-seed, first-seed+1, ... (default 10000; "
+        "training evaluates on 1000-1009 and trains on SeedSequence children)",
+    )
+    p.add_argument(
+        "--baselines",
+        nargs="*",
+        default=["smc", "smc@1000", "proportional"],
+        help="analytic controllers for comparison (default: smc smc@1000 proportional)",
+    )
+    p.add_argument(
+        "--set",
+        dest="sets",
+        action="append",
+        default=[],
+        metavar="FIELD=VALUE",
+        help="extra PairFlockConfig override for every run",
+    )
+    p.add_argument(
+        "--out", type=Path, default=None, help="output folder (default results/eval_<model name>)"
+    )
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=min(2, os.cpu_count() or 1),
+        help="worker processes (default 2; 1 runs here)",
+    )
+    p.add_argument(
+        "--check",
+        action="store_true",
+        help="exit status 1 unless the learned policy meets the N=20 corners targets",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
 
@@ -178,8 +229,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     for b in args.baselines:
         name = b.split("@", 1)[0]
         if name not in POLICIES or name.endswith(":"):
-            parser.error(f"--baselines {b!r} is invalid: analytic controllers are "
-                         f"{', '.join(k for k in POLICIES if not k.endswith(':'))}")  # fmt: skip
+            parser.error(
+                f"--baselines {b!r} is invalid: analytic controllers are "
+                f"{', '.join(k for k in POLICIES if not k.endswith(':'))}"
+            )
         if "@" in b:
             try:
                 if float(b.split("@", 1)[1]) <= 0:
@@ -194,8 +247,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     out = args.out or Path("results") / f"eval_{args.model.stem}"
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     policies = ["learned", *args.baselines]
-    jobs = [(str(args.model), pol, n, init, seeds, extra)
-            for n in sorted(args.n_uavs, reverse=True) for init in args.init for pol in policies]  # fmt: skip
+    jobs = [
+        (str(args.model), pol, n, init, seeds, extra)
+        for n in sorted(args.n_uavs, reverse=True)
+        for init in args.init
+        for pol in policies
+    ]
     t0 = time.perf_counter()
     rows: list[dict[str, Any]] = []
     bar = tqdm(total=len(jobs), desc="evaluate", unit="job", disable=args.quiet)
@@ -214,19 +271,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     rows.sort(key=lambda r: (r["init"] != "corners", r["n_uavs"], order[r["policy"]], r["seed"]))
     table = summary_table(rows, policies)
     checks = acceptance(rows)
-    md = [f"# Evaluation of `{args.model}`", "",
-          f"Held-out seeds {seeds[0]}-{seeds[-1]}; full episodes; median [min-max] over seeds; "
-          "metrics of `pairflock_env.metrics` via `baselines.rollout`.", "", table, ""]  # fmt: skip
+    md = [
+        f"# Evaluation of `{args.model}`",
+        "",
+        f"Held-out seeds {seeds[0]}-{seeds[-1]}; full episodes; median [min-max] over seeds; "
+        "metrics of `pairflock_env.metrics` via `baselines.rollout`.",
+        "",
+        table,
+        "",
+    ]
     if checks:
-        md += ["## Targets (learned policy, N = 20, corners)", "",
-               "| criterion | result | measured |", "|---|---|---|"]  # fmt: skip
+        md += [
+            "## Targets (learned policy, N = 20, corners)",
+            "",
+            "| criterion | result | measured |",
+            "|---|---|---|",
+        ]
         md += [f"| {c} | {_verdict(c, ok)} | {d} |" for c, ok, d in checks]
     write_csv(out / "results.csv", rows)
     atomic_write_text(out / "summary.md", "\n".join(md) + "\n")
-    write_json(out / "run.json", run_record(
-        model=str(args.model), seeds=seeds, n_uavs=args.n_uavs, init=args.init,
-        policies=policies, extra_overrides=extra, wall_s=round(time.perf_counter() - t0, 1),
-    ))  # fmt: skip
+    write_json(
+        out / "run.json",
+        run_record(
+            model=str(args.model),
+            seeds=seeds,
+            n_uavs=args.n_uavs,
+            init=args.init,
+            policies=policies,
+            extra_overrides=extra,
+            wall_s=round(time.perf_counter() - t0, 1),
+        ),
+    )
     print(table)
     for c, ok, d in checks:
         print(f"[{_verdict(c, ok)}] {c}: {d}")

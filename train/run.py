@@ -21,7 +21,7 @@ import numpy as np
 
 from .settings import RunSettings
 
-__all__ = ["RunResult", "train", "make_vec_env", "evaluate_policy_rows", "METADATA_KEY"]
+__all__ = ["METADATA_KEY", "RunResult", "evaluate_policy_rows", "make_vec_env", "train"]
 
 METADATA_KEY = "pairflock"
 FINAL_MODEL = "final_model.zip"
@@ -87,7 +87,9 @@ def resolve_schedules(hp: dict[str, Any]) -> dict[str, Any]:
             try:
                 start = float(v[4:])
             except ValueError:
-                raise ValueError(f"hyperparameter {key}={v!r} is invalid: use lin_<number>") from None
+                raise ValueError(
+                    f"hyperparameter {key}={v!r} is invalid: use lin_<number>"
+                ) from None
             if start <= 0:
                 raise ValueError(f"hyperparameter {key}={v!r} is invalid: the start must be > 0")
             out[key] = linear_schedule(start)
@@ -249,10 +251,14 @@ def train(
     else:
         baselines, base_rows = {}, []
         for name in settings.eval_baselines:
-            rows = evaluate_policy_rows(make_pair_policy(name, eval_cfg), eval_cfg, settings.eval_seeds)
+            rows = evaluate_policy_rows(
+                make_pair_policy(name, eval_cfg), eval_cfg, settings.eval_seeds
+            )
             baselines[name] = summarize_metrics(rows)
             base_rows += [{"policy": name, **r} for r in rows]
-        write_json(base_path, {"seeds": settings.eval_seeds, "summary": baselines, "rows": base_rows})
+        write_json(
+            base_path, {"seeds": settings.eval_seeds, "summary": baselines, "rows": base_rows}
+        )
 
     history: list[dict[str, Any]] = list(ckpt_state["history"]) if ckpt_state else []
 
@@ -266,33 +272,49 @@ def train(
         atomic_write_text(out / "eval.csv", _csv_rows_text(history))
         if improved:
             _save_model_atomic(model, out / BEST_MODEL)
-            write_json(out / "best_model.json", {"step": step, "summary": summary,
-                                                 "seeds": settings.eval_seeds})  # fmt: skip
+            write_json(
+                out / "best_model.json",
+                {"step": step, "summary": summary, "seeds": settings.eval_seeds},
+            )
 
     def wall() -> float:
         return wall_before + time.perf_counter() - t_start
 
     progress = ProgressCallback(settings.total_steps, disable=quiet)
     # a new run evaluates its initial policy first; a resumed one keeps its schedule
-    evaluator = EvalCallback(evaluate, baselines, settings.eval_every, on_result, progress,
-                             next_eval=0 if ckpt_state is None else ckpt_state["next_eval"],
-                             best_score=ckpt_state["best_score"] if ckpt_state else math.inf)  # fmt: skip
+    evaluator = EvalCallback(
+        evaluate,
+        baselines,
+        settings.eval_every,
+        on_result,
+        progress,
+        next_eval=0 if ckpt_state is None else ckpt_state["next_eval"],
+        best_score=ckpt_state["best_score"] if ckpt_state else math.inf,
+    )
     checkpointer = None
 
     def save(step: int) -> Path:
         return save_checkpoint(
-            out / "checkpoints", model, venv,
-            {"history": history, "next_eval": evaluator.next_eval,
-             "best_score": evaluator.best_score,
-             "next_checkpoint": checkpointer.next_save if checkpointer else step,
-             "wall_s": wall()},
+            out / "checkpoints",
+            model,
+            venv,
+            {
+                "history": history,
+                "next_eval": evaluator.next_eval,
+                "best_score": evaluator.best_score,
+                "next_checkpoint": checkpointer.next_save if checkpointer else step,
+                "wall_s": wall(),
+            },
             settings.keep_checkpoints,
-        )  # fmt: skip
+        )
 
     checkpointer = CheckpointCallback(
-        save, settings.checkpoint_every,
-        next_save=settings.checkpoint_every if ckpt_state is None else ckpt_state["next_checkpoint"],
-    )  # fmt: skip
+        save,
+        settings.checkpoint_every,
+        next_save=settings.checkpoint_every
+        if ckpt_state is None
+        else ckpt_state["next_checkpoint"],
+    )
 
     record = run_record(
         settings=settings.to_dict(),
@@ -317,8 +339,12 @@ def train(
     with guard as interrupt:
         stopper = StopCallback(interrupt, time_limit, t_start)
         if remaining > 0:
-            model.learn(remaining, callback=[stopper, progress, checkpointer, evaluator],
-                        reset_num_timesteps=False, progress_bar=False)  # fmt: skip
+            model.learn(
+                remaining,
+                callback=[stopper, progress, checkpointer, evaluator],
+                reset_num_timesteps=False,
+                progress_bar=False,
+            )
         else:
             progress.disable = True
         if stopper.reason is not None:
@@ -340,7 +366,9 @@ def train(
         num_timesteps=int(model.num_timesteps),
         wall_s=round(wall(), 1),
         session_wall_s=round(time.perf_counter() - t_start, 1),
-        steps_per_s=round((model.num_timesteps - start_steps) / max(time.perf_counter() - t_start, 1e-9), 1),
+        steps_per_s=round(
+            (model.num_timesteps - start_steps) / max(time.perf_counter() - t_start, 1e-9), 1
+        ),
         last_checkpoint=str(ck),
         final_summary=final_summary,
         baselines=baselines,

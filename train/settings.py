@@ -145,8 +145,14 @@ class RunSettings:
 
         if self.algo not in ALGOS:
             raise ValueError(f"algo={self.algo!r} is invalid: must be one of {', '.join(ALGOS)}")
-        for name in ("num_swarms", "total_steps", "eval_every", "checkpoint_every", "seed",
-                     "keep_checkpoints"):  # fmt: skip
+        for name in (
+            "num_swarms",
+            "total_steps",
+            "eval_every",
+            "checkpoint_every",
+            "seed",
+            "keep_checkpoints",
+        ):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, int):
                 raise TypeError(f"{name}={v!r} is invalid: must be an integer")
@@ -156,7 +162,9 @@ class RunSettings:
         if self.time_limit is not None and not (
             isinstance(self.time_limit, (int, float)) and self.time_limit > 0
         ):
-            raise ValueError(f"time_limit={self.time_limit!r} is invalid: must be > 0 minutes or None")
+            raise ValueError(
+                f"time_limit={self.time_limit!r} is invalid: must be > 0 minutes or None"
+            )
         for name in ("env", "eval_env", "frame_params", "hyperparameters"):
             if not isinstance(getattr(self, name), Mapping):
                 raise TypeError(f"{name}={getattr(self, name)!r} is invalid: must be a mapping")

@@ -89,20 +89,39 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=__doc__.split("\n\n", 2)[2],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--algo", choices=("ppo", "sac", "td3"), default="ppo", help="algorithm (default ppo)")
+    p.add_argument(
+        "--algo", choices=("ppo", "sac", "td3"), default="ppo", help="algorithm (default ppo)"
+    )
     p.add_argument("--n-uavs", type=int, default=20, help="swarm size N (default 20)")
     p.add_argument("--num-swarms", type=int, default=16, help="swarms per VecEnv (default 16)")
-    p.add_argument("--steps", type=int, default=100_000,
-                   help="timed training steps per measurement (default 100000)")
-    p.add_argument("--env-steps", type=int, default=50_000,
-                   help="timed random-action env steps per measurement (default 50000)")
+    p.add_argument(
+        "--steps",
+        type=int,
+        default=100_000,
+        help="timed training steps per measurement (default 100000)",
+    )
+    p.add_argument(
+        "--env-steps",
+        type=int,
+        default=50_000,
+        help="timed random-action env steps per measurement (default 50000)",
+    )
     p.add_argument("--repeats", type=int, default=3, help="alternating repeats (default 3)")
-    p.add_argument("--hp", action="append", default=[], metavar="NAME=VALUE",
-                   help="SB3 hyperparameter for both routes (default: train.settings defaults "
-                   "with n_steps=128, batch_size=1024 for PPO)")
+    p.add_argument(
+        "--hp",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="SB3 hyperparameter for both routes (default: train.settings defaults "
+        "with n_steps=128, batch_size=1024 for PPO)",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
-    p.add_argument("--out", type=Path, default=Path("results/throughput.json"),
-                   help="result file (default results/throughput.json)")
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=Path("results/throughput.json"),
+        help="result file (default results/throughput.json)",
+    )
     return p
 
 
@@ -111,7 +130,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     for name in ("n_uavs", "num_swarms", "steps", "env_steps", "repeats"):
         if getattr(args, name) < 1:
-            raise SystemExit(f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: must be >= 1")
+            raise SystemExit(
+                f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: must be >= 1"
+            )
     import numpy as np
     import torch
 
@@ -153,12 +174,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"  training steps/s (incl. learning): native {med['native']['learn']:.0f}, "
         f"supersuit {med['supersuit']['learn']:.0f}, ratio {ratio['learn']:.2f}x"
     )
-    write_json(args.out, run_record(
-        algo=args.algo, n_uavs=args.n_uavs, num_swarms=args.num_swarms, rows=rows,
-        steps=args.steps, env_steps=args.env_steps, repeats=args.repeats, hyperparameters=hp,
-        task=overrides, measurements=results, median=med, ratio=ratio,
-        load_average=list(os.getloadavg()), cpu_count=os.cpu_count(),
-    ))  # fmt: skip
+    write_json(
+        args.out,
+        run_record(
+            algo=args.algo,
+            n_uavs=args.n_uavs,
+            num_swarms=args.num_swarms,
+            rows=rows,
+            steps=args.steps,
+            env_steps=args.env_steps,
+            repeats=args.repeats,
+            hyperparameters=hp,
+            task=overrides,
+            measurements=results,
+            median=med,
+            ratio=ratio,
+            load_average=list(os.getloadavg()),
+            cpu_count=os.cpu_count(),
+        ),
+    )
     print(summary)
     print(f"wrote {args.out}")
     return 0

@@ -17,7 +17,7 @@ from ..config import PairFlockConfig
 from .particle import ParticleModel
 from .quadrotor import QuadrotorModel
 
-__all__ = ["VehicleModel", "ParticleModel", "QuadrotorModel", "VEHICLES", "make_vehicle"]
+__all__ = ["VEHICLES", "ParticleModel", "QuadrotorModel", "VehicleModel", "make_vehicle"]
 
 
 class VehicleModel(Protocol):

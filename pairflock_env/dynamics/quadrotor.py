@@ -72,7 +72,7 @@ from numba import njit
 from ..config import PairFlockConfig
 from ..math3d import so3_exp_scalar
 
-__all__ = ["QuadrotorModel", "QuadrotorParams", "ROTOR_ANGLES_DEG", "ROTOR_SPIN"]
+__all__ = ["ROTOR_ANGLES_DEG", "ROTOR_SPIN", "QuadrotorModel", "QuadrotorParams"]
 
 #: rotor positions: angle from the body x axis (deg), X configuration
 ROTOR_ANGLES_DEG = (45.0, 135.0, 225.0, 315.0)
@@ -80,9 +80,35 @@ ROTOR_ANGLES_DEG = (45.0, 135.0, 225.0, 315.0)
 ROTOR_SPIN = (1.0, -1.0, 1.0, -1.0)
 
 # indices into the kernel's parameter vector
-(_M, _G, _JX, _JY, _JZ, _D, _KAPPA, _KF, _TMIN, _TMAX, _ALPHA, _KD, _KRX, _KRY, _KRZ,
- _KWX, _KWY, _KWZ, _AMAX, _TANTILT, _FZMIN, _CPSI, _SPSI, _COSCRASH, _GROUND, _DESAT,
- _NPARAM) = range(27)  # fmt: skip
+(
+    _M,
+    _G,
+    _JX,
+    _JY,
+    _JZ,
+    _D,
+    _KAPPA,
+    _KF,
+    _TMIN,
+    _TMAX,
+    _ALPHA,
+    _KD,
+    _KRX,
+    _KRY,
+    _KRZ,
+    _KWX,
+    _KWY,
+    _KWZ,
+    _AMAX,
+    _TANTILT,
+    _FZMIN,
+    _CPSI,
+    _SPSI,
+    _COSCRASH,
+    _GROUND,
+    _DESAT,
+    _NPARAM,
+) = range(27)
 
 
 class QuadrotorParams:
@@ -135,14 +161,23 @@ class QuadrotorParams:
         flag (...,) for collective thrusts f (...,) (N) and body moments M (..., 3) (N m)."""
         f = np.asarray(f, dtype=np.float64)
         M = np.asarray(M, dtype=np.float64)
-        if M.shape != f.shape + (3,):
-            raise ValueError(f"M has shape {M.shape}; expected f.shape + (3,) = {f.shape + (3,)}")
+        if M.shape != (*f.shape, 3):
+            raise ValueError(f"M has shape {M.shape}; expected f.shape + (3,) = {(*f.shape, 3)}")
         ff = np.ascontiguousarray(f.reshape(-1))
         T = np.empty((ff.shape[0], 4))
         sat = np.empty(ff.shape[0], np.bool_)
-        _mix_rows(ff, np.ascontiguousarray(M.reshape(-1, 3)), 0.25 / self.d, 0.25 / self.kappa,
-                  self.t_min, self.t_max, self.desaturate, T, sat)  # fmt: skip
-        return T.reshape(f.shape + (4,)), sat.reshape(f.shape)
+        _mix_rows(
+            ff,
+            np.ascontiguousarray(M.reshape(-1, 3)),
+            0.25 / self.d,
+            0.25 / self.kappa,
+            self.t_min,
+            self.t_max,
+            self.desaturate,
+            T,
+            sat,
+        )
+        return T.reshape((*f.shape, 4)), sat.reshape(f.shape)
 
     def mixer_matrix(self) -> np.ndarray:
         """A (4, 4): [f, Mx, My, Mz] = A @ [T_0, T_1, T_2, T_3] (N, N m)."""
@@ -164,8 +199,13 @@ def _mix(f, mx, my, mz, inv4d, inv4k, tmin, tmax, desaturate):
     if base + lo >= tmin and base + hi <= tmax:
         return base + d0, base + d1, base + d2, base + d3, False
     if not desaturate:
-        return (min(max(base + d0, tmin), tmax), min(max(base + d1, tmin), tmax),
-                min(max(base + d2, tmin), tmax), min(max(base + d3, tmin), tmax), True)  # fmt: skip
+        return (
+            min(max(base + d0, tmin), tmax),
+            min(max(base + d1, tmin), tmax),
+            min(max(base + d2, tmin), tmax),
+            min(max(base + d3, tmin), tmax),
+            True,
+        )
     span = hi - lo
     if span > tmax - tmin:  # not even the moments fit: scale them, keep their direction
         sc = (tmax - tmin) / span
@@ -176,22 +216,29 @@ def _mix(f, mx, my, mz, inv4d, inv4k, tmin, tmax, desaturate):
         hi *= sc
         lo *= sc
     base = min(max(base, tmin - lo), tmax - hi)  # least change of the collective thrust
-    return (min(max(base + d0, tmin), tmax), min(max(base + d1, tmin), tmax),
-            min(max(base + d2, tmin), tmax), min(max(base + d3, tmin), tmax), True)  # fmt: skip
+    return (
+        min(max(base + d0, tmin), tmax),
+        min(max(base + d1, tmin), tmax),
+        min(max(base + d2, tmin), tmax),
+        min(max(base + d3, tmin), tmax),
+        True,
+    )
 
 
 @njit(cache=True)
 def _mix_rows(f, M, inv4d, inv4k, tmin, tmax, desaturate, T, sat):
     for i in range(f.shape[0]):
-        t0, t1, t2, t3, s = _mix(f[i], M[i, 0], M[i, 1], M[i, 2], inv4d, inv4k, tmin, tmax,
-                                 desaturate)  # fmt: skip
+        t0, t1, t2, t3, s = _mix(
+            f[i], M[i, 0], M[i, 1], M[i, 2], inv4d, inv4k, tmin, tmax, desaturate
+        )
         T[i, 0], T[i, 1], T[i, 2], T[i, 3] = t0, t1, t2, t3
         sat[i] = s
 
 
 @njit(cache=True, nogil=True)
-def _quadrotor_kernel(q, p, a_des, R, w, rotor, crashed, R_des, saturated, limited, crashed_now,
-                      substeps, h, prm):  # fmt: skip
+def _quadrotor_kernel(
+    q, p, a_des, R, w, rotor, crashed, R_des, saturated, limited, crashed_now, substeps, h, prm
+):
     B, N, _ = q.shape
     m, g = prm[_M], prm[_G]
     jx, jy, jz = prm[_JX], prm[_JY], prm[_JZ]
@@ -318,8 +365,16 @@ def _quadrotor_kernel(q, p, a_des, R, w, rotor, crashed, R_des, saturated, limit
                 n21 = r20 * e[1] + r21 * e[4] + r22 * e[7]
                 n22 = r20 * e[2] + r21 * e[5] + r22 * e[8]
                 r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
-                    n00, n01, n02, n10, n11, n12, n20, n21, n22
-                )  # fmt: skip
+                    n00,
+                    n01,
+                    n02,
+                    n10,
+                    n11,
+                    n12,
+                    n20,
+                    n21,
+                    n22,
+                )
                 # 8. crash check
                 fin = math.isfinite(x + y + z + vx + vy + vz + wx + wy + wz + r22)
                 if not fin or r22 < coscrash or z < ground:
@@ -395,10 +450,21 @@ class QuadrotorModel:
         """Fly ``substeps`` physics steps under the held desired acceleration a_des (B, N, 3)."""
         prm = self.params
         _quadrotor_kernel(
-            q, p, np.ascontiguousarray(a_des, dtype=np.float64), self.R, self.omega,
-            self.rotor_speed, self.crashed, self.R_des, self.motor_saturated,
-            self.accel_limited, self._crashed_now, prm.substeps, prm.h, prm.vector,
-        )  # fmt: skip
+            q,
+            p,
+            np.ascontiguousarray(a_des, dtype=np.float64),
+            self.R,
+            self.omega,
+            self.rotor_speed,
+            self.crashed,
+            self.R_des,
+            self.motor_saturated,
+            self.accel_limited,
+            self._crashed_now,
+            prm.substeps,
+            prm.h,
+            prm.vector,
+        )
 
     def tilt(self) -> np.ndarray:
         """Angle between each body z axis and the vertical, (B, N), degrees."""

@@ -4,12 +4,11 @@ and rendering one swarm. No physics here."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-
-import dataclasses
 
 from ..config import PairFlockConfig, make_config
 from ..core import PairFlockCore, real_array
@@ -130,7 +129,9 @@ class SwarmFrames:
         if self.render_mode is None:
             import warnings
 
-            warnings.warn("render() called without a render_mode; pass render_mode=...", stacklevel=3)
+            warnings.warn(
+                "render() called without a render_mode; pass render_mode=...", stacklevel=3
+            )
             return None
         from ..render import SwarmRenderer
 

@@ -15,7 +15,7 @@ from ..core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore, real_array
 from ..observations import ObsLayout
 from ..render import SwarmRenderer
 
-__all__ = ["PairFlockParallelEnv", "parallel_env", "raw_env", "env", "agent_name"]
+__all__ = ["PairFlockParallelEnv", "agent_name", "env", "parallel_env", "raw_env"]
 
 RENDER_MODES = ("rgb_array", "human")
 
@@ -68,8 +68,8 @@ crash semantics are in ``docs/quadrotor.md``.
 ``init="corners"``: pair members at ``swarm_center`` -/+ ``pair_corner`` on every axis (the
 paper's (-90, -90) and (90, 90)), other UAVs uniform in ``swarm_center`` +- ``swarm_half_width``
 ([-50, 50]^dim in the paper preset), no two closer than ``min_init_spacing``, everyone at
-rest (quadrotors level, rotors at hover speed). ``reset(options={{"positions": ..., "velocities": ...}})``
-sets the state explicitly.
+rest (quadrotors level, rotors at hover speed).
+``reset(options={{"positions": ..., "velocities": ...}})`` sets the state explicitly.
 
 ## Episode end
 Truncation after ``config.episode_steps`` control steps (50 s in the paper preset; override
@@ -143,11 +143,13 @@ class PairFlockParallelEnv(ParallelEnv):
         self._agent_index = {a: m for m, a in enumerate(self.possible_agents)}
         obs_space = spaces.Box(-np.inf, np.inf, (self.layout.size,), np.float32)
         act_space = spaces.Box(-1.0, 1.0, (self.config.dim,), np.float32)
-        self.observation_spaces = {a: obs_space for a in self.possible_agents}
-        self.action_spaces = {a: act_space for a in self.possible_agents}
+        self.observation_spaces = dict.fromkeys(self.possible_agents, obs_space)
+        self.action_spaces = dict.fromkeys(self.possible_agents, act_space)
         # distinct objects per agent so that seeding one agent's space does not seed another's
         for a in self.possible_agents[1:]:
-            self.observation_spaces[a] = spaces.Box(-np.inf, np.inf, (self.layout.size,), np.float32)
+            self.observation_spaces[a] = spaces.Box(
+                -np.inf, np.inf, (self.layout.size,), np.float32
+            )
             self.action_spaces[a] = spaces.Box(-1.0, 1.0, (self.config.dim,), np.float32)
         self._renderer: SwarmRenderer | None = None
         self._last_info: list[dict[str, Any]] | None = None
@@ -203,7 +205,7 @@ class PairFlockParallelEnv(ParallelEnv):
         agents = self.possible_agents
         obs = {ag: res.obs[0, m] for m, ag in enumerate(agents)}
         r = res.reward[0].tolist()
-        rewards = dict(zip(agents, r))
+        rewards = dict(zip(agents, r, strict=False))
         term = bool(res.terminated[0])
         trunc = bool(res.truncated[0])
         terminations = dict.fromkeys(agents, term)
@@ -233,7 +235,9 @@ class PairFlockParallelEnv(ParallelEnv):
         if self.render_mode is None:
             import warnings
 
-            warnings.warn("render() called without a render_mode; pass render_mode=...", stacklevel=2)
+            warnings.warn(
+                "render() called without a render_mode; pass render_mode=...", stacklevel=2
+            )
             return None
         if self._renderer is None:
             self._renderer = SwarmRenderer(self.config.pairs, self.config.d_m, self.render_mode)

@@ -30,7 +30,7 @@ from ._learning_view import (
 )
 from .parallel import agent_name
 
-__all__ = ["PairFlockVecEnv", "AgentRow"]
+__all__ = ["AgentRow", "PairFlockVecEnv"]
 
 
 class AgentRow:
@@ -43,11 +43,25 @@ class AgentRow:
     ``get_wrapper_attr(name)``.
     """
 
-    _READ_ONLY = frozenset({
-        "index", "swarm", "agent_index", "agent", "uav_index", "partner", "config", "layout",
-        "interface", "observation_space", "action_space", "render_mode", "metadata",
-        "np_random", "unwrapped",
-    })  # fmt: skip
+    _READ_ONLY = frozenset(
+        {
+            "index",
+            "swarm",
+            "agent_index",
+            "agent",
+            "uav_index",
+            "partner",
+            "config",
+            "layout",
+            "interface",
+            "observation_space",
+            "action_space",
+            "render_mode",
+            "metadata",
+            "np_random",
+            "unwrapped",
+        }
+    )
 
     def __init__(self, venv: PairFlockVecEnv, index: int) -> None:
         object.__setattr__(self, "_venv", venv)
@@ -126,8 +140,12 @@ class AgentRow:
     def swarm_state(self) -> dict[str, Any]:
         """Copies of the row's swarm state: positions, velocities (N, dim), sim time, steps."""
         core, b = self._venv.core, self.swarm
-        return {"positions": core.q[b].copy(), "velocities": core.p[b].copy(),
-                "sim_time": float(core.t[b]), "steps": int(core.steps[b])}  # fmt: skip
+        return {
+            "positions": core.q[b].copy(),
+            "velocities": core.p[b].copy(),
+            "sim_time": float(core.t[b]),
+            "steps": int(core.steps[b]),
+        }
 
     def get_wrapper_attr(self, name: str) -> Any:
         return getattr(self, name)
@@ -241,7 +259,9 @@ class PairFlockVecEnv(VecEnv):
         options = self._per_swarm(list(self._options), "options")
         all_rows = np.arange(self.num_swarms)
         if all(not o for o in options):
-            res = self.core.reset_rows(all_rows, seed=None if all(s is None for s in seeds) else seeds)
+            res = self.core.reset_rows(
+                all_rows, seed=None if all(s is None for s in seeds) else seeds
+            )
         else:
             res = None
             for b in all_rows:
@@ -298,7 +318,9 @@ class PairFlockVecEnv(VecEnv):
             self.render()
         return obs.reshape(self.num_envs, -1), rewards, dones, infos
 
-    def _fill_infos(self, infos: list[dict[str, Any]], info: Mapping[str, np.ndarray], swarms) -> None:
+    def _fill_infos(
+        self, infos: list[dict[str, Any]], info: Mapping[str, np.ndarray], swarms
+    ) -> None:
         if not self.info_keys:
             return
         M = self.agents_per_swarm
@@ -371,9 +393,13 @@ class PairFlockVecEnv(VecEnv):
         for r in self._target_rows(indices):
             setattr(r, attr_name, value)
 
-    def env_method(self, method_name: str, *method_args, indices=None, **method_kwargs) -> list[Any]:
-        return [getattr(r, method_name)(*method_args, **method_kwargs)
-                for r in self._target_rows(indices)]  # fmt: skip
+    def env_method(
+        self, method_name: str, *method_args, indices=None, **method_kwargs
+    ) -> list[Any]:
+        return [
+            getattr(r, method_name)(*method_args, **method_kwargs)
+            for r in self._target_rows(indices)
+        ]
 
     def env_is_wrapped(self, wrapper_class, indices=None) -> list[bool]:
         return [False for _ in self._get_indices(indices)]

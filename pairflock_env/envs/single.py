@@ -18,7 +18,7 @@ from ._learning_view import (
     held_step,
 )
 
-__all__ = ["PairFlockGymEnv", "ENV_ID"]
+__all__ = ["ENV_ID", "PairFlockGymEnv"]
 
 ENV_ID = "pairflock/PairFlock-v0"
 
@@ -54,7 +54,8 @@ class PairFlockGymEnv(gym.Env):
 
     ## Observation space
     ``Box(-b, b, (M * n,), float32)``: ``obs.reshape(M, n)[m]`` is what UAV m sees.
-    ``frame="pair"``: b = 5 and the normalised pair-frame features of :class:`~pairflock_env.learning.PairFrameInterface`
+    ``frame="pair"``: b = 5 and the normalised pair-frame features of
+    :class:`~pairflock_env.learning.PairFrameInterface`
     (``env.unwrapped.interface.fields``); ``frame="world"``: the physical observation of
     :class:`~pairflock_env.observations.ObsLayout` (``env.unwrapped.layout``), b = inf. The
     physical observation (M, obs_size) is always available as ``env.unwrapped.physical_obs``.
@@ -169,4 +170,3 @@ class PairFlockGymEnv(gym.Env):
 
     def close(self) -> None:
         self._frames.close()
-

@@ -102,9 +102,7 @@ class PairFlockVectorEnv(VectorEnv):
             return [int(seed) + i for i in range(n)]
         if isinstance(seed, Sequence) and not isinstance(seed, str):
             if len(seed) != n:
-                raise ValueError(
-                    f"seed has {len(seed)} entries, expected {n} (one per sub-env)"
-                )
+                raise ValueError(f"seed has {len(seed)} entries, expected {n} (one per sub-env)")
             return list(seed)
         raise TypeError(
             f"seed={seed!r} is invalid: must be None, an int >= 0 or a list of {n} seeds"
@@ -173,8 +171,12 @@ class PairFlockVectorEnv(VectorEnv):
             rr = self.core.reset_rows(rows)
             obs_phys, info = self._merge(res, rr, rows)
             self._frames.reset(set(rows.tolist()))
-            extra = {"final_obs": final_obs, "_final_obs": ended.copy(),
-                     "final_info": final_info, "_final_info": ended.copy()}  # fmt: skip
+            extra = {
+                "final_obs": final_obs,
+                "_final_obs": ended.copy(),
+                "final_info": final_info,
+                "_final_info": ended.copy(),
+            }
         elif self.autoreset_mode != AutoresetMode.SAME_STEP:
             self._needs_reset = ended.copy()
             if pending.size:
