@@ -24,6 +24,7 @@ from .envs import (
 )
 from .observations import ObsField, ObsLayout
 
+# The one place the version is written: pyproject.toml reads it from here at build time.
 __version__ = "0.1.0"
 
 

@@ -89,8 +89,8 @@ class PairFlockGymEnv(gym.Env):
     >>> obs.shape, env.action_space.shape
     ((104,), (4,))
     >>> obs, r, terminated, truncated, info = env.step(env.action_space.sample())
-    >>> round(info["sim_time"], 2)
-    0.01
+    >>> round(info["sim_time"], 2)  # one decision = 5 control steps of 0.01 s
+    0.05
 
     ## Version history
     * v0: initial release.

@@ -1,0 +1,91 @@
+"""The documentation builds, its examples run, and what it says is generated stays so."""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import re
+import subprocess
+import sys
+from importlib import metadata
+from pathlib import Path
+
+import pytest
+
+import baselines
+import pairflock_env
+from pairflock_env import PRESETS, ObsLayout
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+
+
+def _python_blocks(path: Path) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", path.read_text(), flags=re.S)
+
+
+@pytest.mark.skipif(
+    importlib.util.find_spec("mkdocs") is None or importlib.util.find_spec("mkdocstrings") is None,
+    reason="the docs tooling (mkdocs, mkdocstrings) is in the dev extra",
+)
+def test_the_site_builds_without_a_warning(tmp_path):
+    # --strict: a broken link or anchor, a page missing from the nav, or an API object that
+    # does not resolve fails the build
+    env = dict(os.environ, NO_MKDOCS_2_WARNING="1")
+    run = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "-q", "-d", str(tmp_path / "site")],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert run.returncode == 0, run.stdout + run.stderr
+    api = (tmp_path / "site" / "api" / "core" / "index.html").read_text()
+    assert 'id="pairflock_env.PairFlockCore"' in api  # the reference is generated
+    cli = (tmp_path / "site" / "api" / "cli" / "index.html").read_text()
+    assert "usage: python -m train" in cli  # and so is each --help
+
+
+def test_the_environment_page_shows_the_generated_observation_table():
+    assert ObsLayout(2, 6).markdown_table() in (DOCS / "environment.md").read_text()
+
+
+def test_the_home_page_example_is_the_readme_example():
+    readme = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
+    assert _python_blocks(DOCS / "index.md")[0] == readme[0]  # tests/test_readme.py runs it
+
+
+def test_the_extending_page_examples_run(capsys):
+    # the examples add a controller and a preset to the registries: take them out afterwards
+    added = (baselines.POLICIES, set(baselines.POLICIES)), (PRESETS, set(PRESETS))
+    namespace: dict = {}
+    try:
+        for code in _python_blocks(DOCS / "extending.md"):
+            exec(compile(code, "docs/extending.md", "exec"), namespace)
+        assert "ff_pd" in baselines.POLICIES and "dense" in PRESETS
+    finally:
+        for registry, before in added:
+            for name in set(registry) - before:
+                del registry[name]
+    error = float(re.search(r"pair error after 20 s: ([-+0-9.]+) m", capsys.readouterr().out)[1])
+    assert abs(error) < 0.5  # the example controller brings the pair into the 0.5 m band
+
+
+def test_the_version_is_written_once():
+    tomllib = pytest.importorskip("tomllib")  # Python >= 3.11
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert "version" not in project["project"] and "version" in project["project"]["dynamic"]
+    attr = project["tool"]["setuptools"]["dynamic"]["version"]["attr"]
+    assert attr == "pairflock_env.__version__"
+    assert re.fullmatch(r"\d+\.\d+\.\d+(\.dev\d+|rc\d+)?", pairflock_env.__version__)
+    assert metadata.version("pairflock-env") == pairflock_env.__version__, (
+        "the installed metadata is stale: reinstall with pip install -e ."
+    )
+
+
+def test_the_doctests_run_with_the_suite():
+    tomllib = pytest.importorskip("tomllib")
+    options = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"]["ini_options"]
+    assert "--doctest-modules" in options["addopts"].split()
+    assert "pairflock_env" in options["testpaths"]
