@@ -32,8 +32,8 @@ the projection of g_1 onto the set's directions, or left in place when that proj
 zero). Each candidate lies in the ball, so its smallest margin is a lower bound of t*, and
 the largest over all candidates is t*.
 
-Tolerances: a constraint counts as satisfied within ``ftol = 1e-9 max(1, U)`` (m/s^2), the
-ball within a relative 1e-12; a set of normals counts as dependent when a Cholesky pivot of
+Tolerances: a constraint counts as satisfied within ``ftol = 1e-9 (1 + max(||u_nom||,
+max_k |b_k|))`` (m/s^2), the ball within a relative 1e-12; a set of normals counts as dependent when a Cholesky pivot of
 its Gram matrix falls below 1e-10 of its diagonal entry.
 """
 
@@ -243,10 +243,13 @@ def _solve(un, G, b, K, U, D, W, idx, cand, u_best, out):
 
     W: scratch (3, 4, 4); idx: (4,) int; cand, u_best: (3,). b is shifted in place by t*
     when the problem is infeasible (the caller's constraint buffer)."""
-    ftol = 1e-9 * max(1.0, U)
     n2 = 0.0
     for k in range(D):
         n2 += un[k] * un[k]
+    scale = 1.0 + np.sqrt(n2)
+    for k in range(K):
+        scale = max(scale, 1.0 + abs(b[k]))
+    ftol = 1e-9 * scale
     if n2 <= U * U and _margin(G, b, K, D, un) >= 0.0:
         out[:D] = un[:D]
         return STATUS_NOMINAL, np.inf
