@@ -273,9 +273,11 @@ def simulate(
         towards = np.take_along_axis(
             xo, np.linalg.norm(xo, axis=-1).argmin(-1)[..., None, None], axis=2
         )[:, :, 0]
-        a[:, n_agents:] = (
-            factor * P.other_accel * towards / np.linalg.norm(towards, axis=-1)[..., None]
-        )
+        if rand:
+            towards = rng.normal(size=towards.shape)
+        size = rng.uniform(0, 1, (B, n_obs, 1)) if rand else 1.0
+        unit = towards / np.linalg.norm(towards, axis=-1, keepdims=True)
+        a[:, n_agents:] = factor * P.other_accel * size * unit
         if exact:
             q += p * T + 0.5 * T * T * a
             p += a * T
