@@ -24,7 +24,7 @@ from pairflock_env.safety import (
     project,
     safety_filter,
 )
-from pairflock_env.safety.barrier import _sigma_min
+from pairflock_env.safety._kernels import _sigma_min
 
 # ----------------------------------------------------------------------------- references
 
@@ -407,3 +407,20 @@ def test_params_validation_and_config():
         filt.apply(z, z, np.zeros((1, 2, 2)), np.zeros((1, 3, 2)))
     with pytest.raises(ValueError, match="agents"):
         SafetyFilter(P, [0, 3], 3)
+
+
+def test_active_means_a_barrier_constraint_and_correction_its_size():
+    P = SafetyParams(accel_limit=50.0)
+    filt = SafetyFilter(P, [0], 2)
+    q = np.array([[[0.0, 0.0], [10.0, 0.0]]] * 3)
+    p = np.zeros((3, 2, 2))
+    p[2, 0] = [40.0, 0.0]  # closing at 40 m/s from 9 m: must brake
+    un = np.array([[[0.0, 30.0]], [[0.0, 80.0]], [[0.0, 30.0]]])
+    out = filt.apply(q, p, np.zeros((3, 1, 2)), un)
+    assert np.array_equal(out.u[0], un[0]) and out.correction[0, 0] == 0.0
+    assert not out.active[0, 0]
+    # outside the bound only: projected onto the ball, not a safety intervention
+    np.testing.assert_allclose(out.u[1, 0], [0.0, 50.0])
+    assert not out.active[1, 0] and out.correction[1, 0] == pytest.approx(30.0)
+    assert out.active[2, 0] and out.u[2, 0, 0] < 0 and out.barrier[2, 0] < out.barrier[0, 0]
+    assert out.correction[2, 0] == pytest.approx(np.linalg.norm(out.u[2, 0] - un[2, 0]))

@@ -25,116 +25,11 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numba import njit
 
+from ._kernels import _filter_kernel
 from .params import SafetyParams
-from .qp import STATUS_INFEASIBLE, STATUS_NOMINAL, _solve
 
 __all__ = ["SafetyFilter", "SafetyOutput", "safety_filter"]
-
-
-@njit(cache=True, nogil=True)
-def _sigma_min(e, v, eps, a, T, c, lam):
-    """(H, sigma_min): the barrier and the smallest line-of-sight relative acceleration
-    that keeps H(next) >= (1 - lam) H and e(next) >= min(e, 0) (module docstring)."""
-    beta = (c - 0.5) * a * T
-    H = np.sign(e) * np.sqrt(2.0 * a * abs(e)) + v + beta
-    K = v - eps + beta - (1.0 - lam) * H
-    cT2 = c * T * T
-    s0 = -(e + T * v) / cT2  # sigma at which the projected next distance is D_s
-    R0 = -(T * s0 + K)
-    Ac = a * c * T
-    R = abs(R0)
-    z = R * R / (T * (R + Ac + np.sqrt(Ac * (2.0 * R + Ac))))
-    s_b = s0 + z if R0 >= 0.0 else s0 - z
-    s_a = s0 + min(e, 0.0) / cT2
-    return H, max(s_a, s_b)
-
-
-@njit(cache=True, nogil=True)
-def _constraints(b, i, q, p, f, coop, Ds, alpha, A_o, R2, lam, T, c, U, G, rhs, n):
-    """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok)."""
-    N, D = q.shape[1], q.shape[2]
-    K = 0
-    hmin = np.inf
-    fn = 0.0
-    for k in range(D):
-        fn += f[k] * f[k]
-    fn = np.sqrt(fn)
-    for j in range(N):
-        if j == i:
-            continue
-        d2 = 0.0
-        w2 = 0.0
-        for k in range(D):
-            d2 += (q[b, i, k] - q[b, j, k]) ** 2
-            w2 += (p[b, i, k] - p[b, j, k]) ** 2
-        if not (np.isfinite(d2) and np.isfinite(w2)):
-            return 0, np.nan, False
-        if d2 >= R2:
-            continue
-        d = np.sqrt(d2)
-        for k in range(D):
-            n[k] = (q[b, i, k] - q[b, j, k]) / d if d > 0.0 else 0.0
-        if d == 0.0:  # coincident: any direction, opposite for the two UAVs
-            n[0] = 1.0 if i < j else -1.0
-        v = 0.0
-        nf = 0.0
-        for k in range(D):
-            v += n[k] * (p[b, i, k] - p[b, j, k])
-            nf += n[k] * f[k]
-        a = 2.0 * alpha if coop[j] else alpha - A_o
-        eps = 0.0
-        if c < 1.0:  # rotation of n within the step (docs/safety.md)
-            amax = 2.0 * (fn + U) if coop[j] else fn + U + A_o
-            geo = min(2.0, 2.0 * T * (np.sqrt(w2) + c * T * amax) / (d + min(d, Ds)))
-            eps = (1.0 - c) * T * amax * geo
-        H, smin = _sigma_min(d - Ds, v, eps, a, T, c, lam)
-        hmin = min(hmin, H)
-        need = 0.5 * smin if coop[j] else smin + A_o
-        if need - nf <= -U:
-            continue  # implied by ||u|| <= U
-        for k in range(D):
-            G[K, k] = n[k]
-        rhs[K] = need - nf
-        K += 1
-    return K, hmin, True
-
-
-@njit(cache=True, nogil=True)
-def _filter_kernel(q, p, f, un, agents, coop, pr, u, active, corr, infeas, hmin):
-    B, M, D = un.shape
-    N = q.shape[1]
-    Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
-    G = np.zeros((max(N, 1), 3))
-    rhs = np.zeros(max(N, 1))
-    W = np.zeros((3, 4, 4))
-    idx = np.zeros(4, np.int64)
-    cand = np.zeros(3)
-    best = np.zeros(3)
-    uin = np.zeros(3)
-    uo = np.zeros(3)
-    nv = np.zeros(3)
-    for b in range(B):
-        for m in range(M):
-            K, h, ok = _constraints(
-                b, agents[m], q, p, f[b, m], coop, Ds, alpha, A_o, R2, lam, T, c, U, G, rhs, nv
-            )
-            hmin[b, m] = h
-            for k in range(D):
-                uin[k] = un[b, m, k]
-            if ok:
-                status, _ = _solve(uin, G, rhs, K, U, D, W, idx, cand, best, uo)
-            else:  # non-finite state (a diverged swarm): pass the command through
-                status = STATUS_INFEASIBLE
-                uo[:D] = uin[:D]
-            dc = 0.0
-            for k in range(D):
-                u[b, m, k] = uo[k]
-                dc += (uo[k] - uin[k]) ** 2
-            corr[b, m] = np.sqrt(dc)
-            active[b, m] = status != STATUS_NOMINAL
-            infeas[b, m] = status == STATUS_INFEASIBLE
 
 
 @dataclasses.dataclass
@@ -144,9 +39,11 @@ class SafetyOutput:
     u: np.ndarray
     """(B, M, dim) filtered pair command, m/s^2; ||u|| <= accel_limit."""
     active: np.ndarray
-    """(B, M) bool: the filter changed the command (a constraint or the bound was binding)."""
+    """(B, M) bool: the nominal command violated a barrier constraint (or the problem was
+    infeasible), so the filter changed it for safety."""
     correction: np.ndarray
-    """(B, M) ||u - u_nom||, m/s^2."""
+    """(B, M) ||u - u_nom||, m/s^2; also > 0 when only the bound ||u|| <= accel_limit cut a
+    nominal command (e.g. a corner of the env's per-axis action box) and active is False."""
     infeasible: np.ndarray
     """(B, M) bool: no command within the bound satisfies every constraint (the output then
     maximises the smallest constraint margin), or the state was not finite."""
