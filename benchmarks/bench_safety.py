@@ -3,6 +3,7 @@
     python benchmarks/bench_safety.py             # N = 100, B = 256, M = 2 (the paper task)
     python benchmarks/bench_safety.py --quick     # fewer repeats
     python benchmarks/bench_safety.py --n 50 --b 64
+    python benchmarks/bench_safety.py --assumptions   # what the filter's parameters face
 
 Times ``SafetyFilter.apply`` (preallocated outputs) on three states of the paper task with
 ``pair_accel_limit=50`` and compares each with the median time of ``PairFlockCore.step`` at
@@ -10,9 +11,17 @@ the same size:
 
 * ``start``: the reset state (the pair in the corners, nothing within the sensing radius of
   most agents): the cost of the neighbour scan alone;
-* ``crossing``: after 2 s of the sliding-mode controller, when the pair crosses the swarm;
+* ``crossing``: after 2 s of the sliding-mode controller with the filter in the loop, when
+  the pair crosses the swarm;
 * ``all active``: the same state with every nominal command pointing at the agent's nearest
   UAV at full bound, so that every agent solves its QCQP.
+
+``--assumptions`` instead runs the sliding-mode controller without the filter (paper
+preset, 8 seeds, first 25 s) and prints percentiles of what the filter's parameters must
+cover: the acceleration of unpaired UAVs towards a paired UAV within the sensing radius
+(``other_accel``), the closing speeds there (``sensing_radius``), the paired UAVs' own
+flocking command (the budget ``accel_limit - brake_accel`` it leaves) and the partners'
+closing speed.
 
 Filter and core batches are timed alternately (calibrated batch sizes, one thread); the
 table gives the medians and the median of the per-repeat ratio, the figure to read on a
@@ -66,6 +75,43 @@ def states(N: int, B: int, limit: float, params: dict):
     return cfg, core, filt, out
 
 
+def assumptions(N: int, seeds: int = 8, radius: float = 20.0) -> None:
+    """Percentiles of the quantities behind the filter's assumptions (module docstring)."""
+    cfg = make_config("paper", n_uavs=N)
+    core = PairFlockCore(cfg, num_envs=seeds)
+    res = core.reset(seed=list(range(seeds)))
+    smc = SlidingModeController(cfg)
+    ia = core.agent_uavs
+    unp = np.setdiff1d(np.arange(N), ia)
+    rec: dict[str, list] = {"toward": [], "closing": [], "own": [], "partner": []}
+    for _ in range(cfg.episode_steps // 2):
+        q, p, acc = core.q, core.p, core.flock_accel
+        for i in ia:
+            x = q[:, i : i + 1] - q[:, unp]
+            d = np.linalg.norm(x, axis=-1)
+            n = x / d[..., None]
+            near = d < radius
+            rec["toward"].append(np.einsum("bud,bud->bu", n, acc[:, unp])[near])
+            rec["closing"].append(-np.einsum("bud,bud->bu", n, p[:, i : i + 1] - p[:, unp])[near])
+            rec["own"].append(np.linalg.norm(acc[:, i], axis=-1))
+        y = q[:, ia[1]] - q[:, ia[0]]
+        rate = np.einsum("bd,bd->b", y, p[:, ia[1]] - p[:, ia[0]]) / np.linalg.norm(y, axis=-1)
+        rec["partner"].append(-rate)
+        act, _ = smc.predict(res.obs.reshape(-1, res.obs.shape[-1]))
+        res = core.step(act.reshape(seeds, ia.size, cfg.dim))
+    print(f"\n## What the filter faces: smc, paper preset, N = {N}, {seeds} seeds, 25 s\n")
+    print("| quantity | p50 | p90 | p99 | p99.9 | max |\n|---|---|---|---|---|---|")
+    names = {
+        "toward": f"unpaired UAV's acceleration towards a paired UAV within {radius} m (m/s^2)",
+        "closing": f"closing speed to unpaired UAVs within {radius} m (m/s)",
+        "own": "paired UAV's own flocking command |f_i| (m/s^2)",
+        "partner": "partners' closing speed (m/s)",
+    }
+    for k, label in names.items():
+        v = np.percentile(np.concatenate(rec[k]), [50, 90, 99, 99.9, 100])
+        print(f"| {label} | " + " | ".join(f"{x:.1f}" for x in v) + " |")
+
+
 def _calls(fn, min_time: float) -> int:
     """Calls of fn per timed batch: doubled until a batch takes min_time (after a warm-up)."""
     fn()
@@ -92,7 +138,11 @@ def main(argv=None) -> None:
     ap.add_argument("--b", type=int, default=256, help="swarms")
     ap.add_argument("--limit", type=float, default=50.0, help="pair_accel_limit, m/s^2")
     ap.add_argument("--quick", action="store_true", help="fewer repeats")
+    ap.add_argument("--assumptions", action="store_true", help="print what the filter faces")
     args = ap.parse_args(argv)
+    if args.assumptions:
+        assumptions(args.n)
+        return
     repeats, min_time = (5, 0.1) if args.quick else (15, 0.3)
     N, B = args.n, args.b
     cfg, core, filt, cases = states(N, B, args.limit, {})
