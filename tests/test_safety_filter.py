@@ -372,8 +372,11 @@ def test_edge_states_stay_finite():
     # a diverged (non-finite) state passes the command through, flagged
     qn = q.copy()
     qn[0, 3] = np.nan
-    o3 = filt.apply(qn, p, np.zeros((4, 2, 2)), un)
+    fn = np.zeros((4, 2, 2))
+    fn[1, 0] = np.inf
+    o3 = filt.apply(qn, p, fn, un)
     assert o3.infeasible[0].all() and np.array_equal(o3.u[0], un[0])
+    assert o3.infeasible[1, 0] and not o3.infeasible[1, 1] and np.isnan(o3.barrier[1, 0])
 
 
 def test_params_validation_and_config():

@@ -316,6 +316,8 @@ def _constraints(b, i, q, p, f, coop, Ds, alpha, A_o, R2, lam, T, c, U, G, rhs, 
     for k in range(D):
         fn += f[k] * f[k]
     fn = np.sqrt(fn)
+    if not np.isfinite(fn):
+        return 0, np.nan, False
     for j in range(N):
         if j == i:
             continue

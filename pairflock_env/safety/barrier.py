@@ -46,9 +46,11 @@ class SafetyOutput:
     nominal command (e.g. a corner of the env's per-axis action box) and active is False."""
     infeasible: np.ndarray
     """(B, M) bool: no command within the bound satisfies every constraint (the output then
-    maximises the smallest constraint margin), or the state was not finite."""
+    maximises the smallest constraint margin), or the agent's state or flocking command was
+    not finite (a diverged swarm: the nominal is passed through)."""
     barrier: np.ndarray
-    """(B, M) smallest barrier value H over the sensed UAVs, m/s (inf: none sensed)."""
+    """(B, M) smallest barrier value H over the sensed UAVs, m/s (inf: none sensed, NaN: a
+    non-finite state)."""
 
     def arrays(self) -> tuple[np.ndarray, ...]:
         """(u, active, correction, infeasible, barrier), the kernel's output order."""
@@ -117,9 +119,9 @@ class SafetyFilter:
         """Filter the nominal pair commands of every agent of every swarm.
 
         Args:
-            q, p: positions (m) and velocities (m/s) of all UAVs, (B, N, dim) float64.
+            q, p: positions (m) and velocities (m/s) of all UAVs, (B, N, dim).
             flock_accel: (B, M, dim) each agent's own flocking command f_i, m/s^2.
-            u_nom: (B, M, dim) nominal pair commands, m/s^2.
+            u_nom: (B, M, dim) nominal pair commands, m/s^2 (finite).
             out: arrays to fill (from :meth:`allocate`); new ones when None.
         Returns:
             ``out``, filled.
@@ -133,8 +135,8 @@ class SafetyFilter:
         shape = (B, self.agents.size, D)
         f = self._array("flock_accel", flock_accel, shape)
         un = self._array("u_nom", u_nom, shape)
-        if not np.isfinite(un).all() or not np.isfinite(f).all():
-            raise ValueError("u_nom and flock_accel must be finite")
+        if not np.isfinite(un).all():
+            raise ValueError("u_nom contains NaN or inf; the nominal commands must be finite")
         if out is None:
             out = self.allocate(B, D)
         elif out.u.shape != shape:
