@@ -13,8 +13,9 @@ the same size:
   most agents): the cost of the neighbour scan alone;
 * ``crossing``: after 2 s of the sliding-mode controller with the filter in the loop, when
   the pair crosses the swarm;
-* ``all active``: the same state with every nominal command pointing at the agent's nearest
-  UAV at full bound, so that every agent solves its QCQP.
+* ``all active``: the same state with every nominal command pointed at the agent's nearest
+  UAV at full bound (the worst nominal for the filter; agents whose neighbours are far
+  enough still pass it unchanged).
 
 ``--assumptions`` instead runs the sliding-mode controller without the filter (paper
 preset, 8 seeds, first 25 s) and prints percentiles of what the filter's parameters must
