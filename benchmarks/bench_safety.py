@@ -1,0 +1,180 @@
+"""Cost of the CBF safety filter next to one core step, measured in the same run.
+
+    python benchmarks/bench_safety.py             # N = 100, B = 256, M = 2 (the paper task)
+    python benchmarks/bench_safety.py --quick     # fewer repeats
+    python benchmarks/bench_safety.py --n 50 --b 64
+    python benchmarks/bench_safety.py --assumptions   # what the filter's parameters face
+
+Times ``SafetyFilter.apply`` (preallocated outputs) on three states of the paper task with
+``pair_accel_limit=50`` and compares each with the median time of ``PairFlockCore.step`` at
+the same size:
+
+* ``start``: the reset state (the pair in the corners, nothing within the sensing radius of
+  most agents): the cost of the neighbour scan alone;
+* ``crossing``: after 2 s of the sliding-mode controller with the filter in the loop, when
+  the pair crosses the swarm;
+* ``all active``: the same state with every nominal command pointed at the agent's nearest
+  UAV at full bound (the worst nominal for the filter; agents whose neighbours are far
+  enough still pass it unchanged).
+
+``--assumptions`` instead runs the sliding-mode controller without the filter (paper
+preset, 8 seeds, first 25 s) and prints percentiles of what the filter's parameters must
+cover: the acceleration of unpaired UAVs towards a paired UAV within the sensing radius
+(``other_accel``), the closing speeds there (``sensing_radius``), the paired UAVs' own
+flocking command (the budget ``accel_limit - brake_accel`` it leaves) and the partners'
+closing speed.
+
+Filter and core batches are timed alternately (calibrated batch sizes, one thread); the
+table gives the medians and the median of the per-repeat ratio, the figure to read on a
+shared machine, where absolute times are noisy.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("MKL_NUM_THREADS", "1")
+os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+
+import argparse
+import statistics
+import time
+
+import numpy as np
+
+from baselines.sliding_mode import SlidingModeController
+from pairflock_env import PairFlockCore, make_config
+from pairflock_env.safety import SafetyFilter, SafetyParams
+
+
+def states(N: int, B: int, limit: float, params: dict):
+    """(config, core, filter, [(name, q, p, f, u_nom)]) for the three benchmark states."""
+    cfg = make_config("paper", n_uavs=N, max_cycles=10**9, pair_accel_limit=limit)
+    core = PairFlockCore(cfg, num_envs=B)
+    res = core.reset(seed=0)
+    smc = SlidingModeController(cfg)
+    ia = core.agent_uavs
+    filt = SafetyFilter(SafetyParams.from_config(cfg, **params), ia, N)
+    buf = filt.allocate(B, cfg.dim)
+
+    def nominal(obs):
+        act, _ = smc.predict(obs.reshape(-1, obs.shape[-1]))
+        return np.clip(act.reshape(B, ia.size, cfg.dim), -1, 1) * limit
+
+    out = [("start", core.q.copy(), core.p.copy(), core.flock_accel.copy(), nominal(res.obs))]
+    for _ in range(200):  # 2 s with the filter in the loop: the pair is in the swarm
+        filt.apply(core.q, core.p, core.flock_accel[:, ia], nominal(res.obs), buf)
+        res = core.step(buf.u / limit)
+    q, p, f = core.q.copy(), core.p.copy(), core.flock_accel.copy()
+    out.append(("crossing", q, p, f, nominal(res.obs)))
+    x = q[:, None] - q[:, ia, None]  # (B, M, N, dim)
+    d = np.linalg.norm(x, axis=-1)
+    d[:, np.arange(ia.size), ia] = np.inf
+    tgt = np.take_along_axis(x, d.argmin(-1)[..., None, None], axis=2)[:, :, 0]
+    out.append(("all active", q, p, f, limit * tgt / np.linalg.norm(tgt, axis=-1)[..., None]))
+    return cfg, core, filt, out
+
+
+def assumptions(N: int, seeds: int = 8, radius: float = 20.0) -> None:
+    """Percentiles of the quantities behind the filter's assumptions (module docstring)."""
+    cfg = make_config("paper", n_uavs=N)
+    core = PairFlockCore(cfg, num_envs=seeds)
+    res = core.reset(seed=list(range(seeds)))
+    smc = SlidingModeController(cfg)
+    ia = core.agent_uavs
+    unp = np.setdiff1d(np.arange(N), ia)
+    rec: dict[str, list] = {"toward": [], "closing": [], "own": [], "partner": []}
+    for _ in range(cfg.episode_steps // 2):
+        q, p, acc = core.q, core.p, core.flock_accel
+        for i in ia:
+            x = q[:, i : i + 1] - q[:, unp]
+            d = np.linalg.norm(x, axis=-1)
+            n = x / d[..., None]
+            near = d < radius
+            rec["toward"].append(np.einsum("bud,bud->bu", n, acc[:, unp])[near])
+            rec["closing"].append(-np.einsum("bud,bud->bu", n, p[:, i : i + 1] - p[:, unp])[near])
+            rec["own"].append(np.linalg.norm(acc[:, i], axis=-1))
+        y = q[:, ia[1]] - q[:, ia[0]]
+        rate = np.einsum("bd,bd->b", y, p[:, ia[1]] - p[:, ia[0]]) / np.linalg.norm(y, axis=-1)
+        rec["partner"].append(-rate)
+        act, _ = smc.predict(res.obs.reshape(-1, res.obs.shape[-1]))
+        res = core.step(act.reshape(seeds, ia.size, cfg.dim))
+    print(f"\n## What the filter faces: smc, paper preset, N = {N}, {seeds} seeds, 25 s\n")
+    print("| quantity | p50 | p90 | p99 | p99.9 | max |\n|---|---|---|---|---|---|")
+    names = {
+        "toward": f"unpaired UAV's acceleration towards a paired UAV within {radius} m (m/s^2)",
+        "closing": f"closing speed to unpaired UAVs within {radius} m (m/s)",
+        "own": "paired UAV's own flocking command |f_i| (m/s^2)",
+        "partner": "partners' closing speed (m/s)",
+    }
+    for k, label in names.items():
+        v = np.percentile(np.concatenate(rec[k]), [50, 90, 99, 99.9, 100])
+        print(f"| {label} | " + " | ".join(f"{x:.1f}" for x in v) + " |")
+
+
+def _calls(fn, min_time: float) -> int:
+    """Calls of fn per timed batch: doubled until a batch takes min_time (after a warm-up)."""
+    fn()
+    n = 1
+    while True:
+        t0 = time.perf_counter()
+        for _ in range(n):
+            fn()
+        if time.perf_counter() - t0 >= min_time:
+            return n
+        n *= 2
+
+
+def _ms(fn, n: int) -> float:
+    t0 = time.perf_counter()
+    for _ in range(n):
+        fn()
+    return 1e3 * (time.perf_counter() - t0) / n
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=100, help="UAVs per swarm")
+    ap.add_argument("--b", type=int, default=256, help="swarms")
+    ap.add_argument("--limit", type=float, default=50.0, help="pair_accel_limit, m/s^2")
+    ap.add_argument("--quick", action="store_true", help="fewer repeats")
+    ap.add_argument("--assumptions", action="store_true", help="print what the filter faces")
+    args = ap.parse_args(argv)
+    if args.assumptions:
+        assumptions(args.n)
+        return
+    repeats, min_time = (5, 0.1) if args.quick else (15, 0.3)
+    N, B = args.n, args.b
+    cfg, core, filt, cases = states(N, B, args.limit, {})
+    buf = filt.allocate(B, cfg.dim)
+    actions = np.zeros((B, core.n_agents, cfg.dim))
+
+    def step():
+        core.step(actions)
+
+    n_step = _calls(step, min_time)
+    print(f"\n## Safety filter vs one core step (N = {N}, B = {B}, M = {core.n_agents})\n")
+    print(f"params: {filt.params}\n")
+    print("| state | active | infeasible | filter (ms) | core.step (ms) | filter / step |")
+    print("|---|---|---|---|---|---|")
+    for name, q, p, f, un in cases:
+        fa = f[:, core.agent_uavs]
+
+        def apply(q=q, p=p, fa=fa, un=un):
+            filt.apply(q, p, fa, un, buf)
+
+        n_f = _calls(apply, min_time)
+        # interleaved, so that both medians see the same load of a shared machine
+        pairs = [(_ms(apply, n_f), _ms(step, n_step)) for _ in range(repeats)]
+        f_ms = statistics.median(x for x, _ in pairs)
+        s_ms = statistics.median(y for _, y in pairs)
+        ratio = statistics.median(x / y for x, y in pairs)
+        print(
+            f"| {name} | {buf.active.mean():.0%} | {buf.infeasible.mean():.0%} | {f_ms:.3f} | "
+            f"{s_ms:.2f} | {100 * ratio:.1f} % |"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,30 @@
+"""A decentralised, minimally invasive safety filter for the paired UAVs (docs/safety.md).
+
+Each paired UAV replaces its nominal pair command u_nom by the command nearest to it (in the
+Euclidean norm, within ``||u|| <= accel_limit``) that satisfies one discrete-time
+braking-distance barrier constraint per UAV it senses, so that it keeps ``safety_distance``
+from every other UAV under the stated assumptions:
+
+>>> from pairflock_env.safety import SafetyFilter, SafetyParams
+>>> filt = SafetyFilter(SafetyParams(accel_limit=50.0), agents=[0, 1], n_uavs=N)
+>>> out = filt.apply(q, p, flock_accel, u_nom)   # out.u, out.active, out.correction, ...
+
+:mod:`.qp` holds the exact solver of the per-agent problem, :mod:`.barrier` the constraints
+and the batched numba kernel, :mod:`.params` the parameters.
+"""
+
+from .barrier import SafetyFilter, SafetyOutput, safety_filter
+from .params import SafetyParams
+from .qp import STATUS_INFEASIBLE, STATUS_NOMINAL, STATUS_PROJECTED, max_margin, project
+
+__all__ = [
+    "STATUS_INFEASIBLE",
+    "STATUS_NOMINAL",
+    "STATUS_PROJECTED",
+    "SafetyFilter",
+    "SafetyOutput",
+    "SafetyParams",
+    "max_margin",
+    "project",
+    "safety_filter",
+]

@@ -1,0 +1,396 @@
+"""The safety filter's numba kernels: the exact per-agent QCQP (:mod:`.qp` explains it) and
+the barrier constraints with the batched filter loop (:mod:`.barrier`, docs/safety.md).
+
+They live in one module on purpose: numba's on-disk cache keys a compiled function on its
+own source file only, so a kernel calling a jitted function from another file could keep
+running a stale compiled copy of it after that file changed.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+#: the nominal command satisfied every constraint and the bound (returned unchanged)
+STATUS_NOMINAL = 0
+#: the nominal command was projected onto the (non-empty) feasible set
+STATUS_PROJECTED = 1
+#: no command within the bound satisfies every constraint: the max-margin fallback was used
+STATUS_INFEASIBLE = 2
+
+_RANK_TOL = 1e-10
+_BALL_TOL = 1e-12
+
+
+@njit(cache=True, nogil=True)
+def _factor(A, s, D, L):
+    """Cholesky factor of the Gram matrix of the first s rows of A into L; False if the rows
+    are (numerically) linearly dependent."""
+    for a in range(s):
+        for c in range(a + 1):
+            acc = 0.0
+            for k in range(D):
+                acc += A[a, k] * A[c, k]
+            L[a, c] = acc
+    for a in range(s):
+        orig = L[a, a]
+        for c in range(a + 1):
+            acc = L[a, c]
+            for k in range(c):
+                acc -= L[a, k] * L[c, k]
+            if c < a:
+                L[a, c] = acc / L[c, c]
+            else:
+                if not (acc > _RANK_TOL * orig) or orig <= 0.0:
+                    return False
+                L[a, a] = np.sqrt(acc)
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _min_norm(A, s, D, L, r, y, z):
+    """z = A^T (A A^T)^-1 r (first s rows of A, factor L from _factor); y is scratch."""
+    for a in range(s):
+        acc = r[a]
+        for c in range(a):
+            acc -= L[a, c] * y[c]
+        y[a] = acc / L[a, a]
+    for a in range(s - 1, -1, -1):
+        acc = y[a]
+        for c in range(a + 1, s):
+            acc -= L[c, a] * y[c]
+        y[a] = acc / L[a, a]
+    for k in range(D):
+        acc = 0.0
+        for a in range(s):
+            acc += A[a, k] * y[a]
+        z[k] = acc
+
+
+@njit(cache=True, nogil=True)
+def _next_comb(idx, s, K):
+    """Advance idx[:s] to the next s-subset of range(K) in lexicographic order."""
+    a = s - 1
+    while a >= 0 and idx[a] == K - s + a:
+        a -= 1
+    if a < 0:
+        return False
+    idx[a] += 1
+    for c in range(a + 1, s):
+        idx[c] = idx[c - 1] + 1
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _margin(G, b, K, D, u):
+    """Smallest constraint margin min_k (g_k . u - b_k); +inf when K = 0."""
+    m = np.inf
+    for k in range(K):
+        acc = -b[k]
+        for j in range(D):
+            acc += G[k, j] * u[j]
+        if acc < m:
+            m = acc
+    return m
+
+
+@njit(cache=True, nogil=True)
+def _feasible(G, b, K, D, u, ftol, hint):
+    """Whether every margin of u is >= -ftol; checks constraint hint[0] first and stores
+    the first violated one there (a candidate usually fails where the previous one did)."""
+    h = hint[0]
+    for i in range(K + 1 if K > 0 else 0):
+        k = h if i == 0 else i - 1
+        if i > 0 and k == h:
+            continue
+        acc = -b[k]
+        for j in range(D):
+            acc += G[k, j] * u[j]
+        if acc < -ftol:
+            hint[0] = k
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _projection_candidate(un, G, b, idx, s, U, D, W, cand):
+    """Candidate of active set idx[:s] (module docstring) into cand. Returns 0 (none), 1 (a
+    candidate) or 2 (a candidate whose KKT multipliers are all >= 0: if it is feasible, it
+    is the optimum)."""
+    A, L, r, y, pi, u0, y1 = W[0], W[1], W[2, 0], W[2, 1], W[2, 2], W[2, 3], W[3, 0]
+    for a in range(s):
+        acc = b[idx[a]]
+        for k in range(D):
+            A[a, k] = G[idx[a], k]
+            acc -= G[idx[a], k] * un[k]
+        r[a] = acc
+    if s > 0 and not _factor(A, s, D, L):
+        return 0
+    _min_norm(A, s, D, L, r, y1, pi)  # pi = un + A^T y1: y1 are the multipliers off the ball
+    for k in range(D):
+        pi[k] += un[k]
+        r[k] = b[idx[k]] if k < s else 0.0
+    _min_norm(A, s, D, L, r, y, u0)  # u0 = A^T y
+    n_pi = 0.0
+    n_u0 = 0.0
+    for k in range(D):
+        n_pi += pi[k] * pi[k]
+        n_u0 += u0[k] * u0[k]
+    U2 = U * U
+    mu = 0.0
+    if n_pi <= U2:
+        cand[:D] = pi[:D]
+    else:
+        if n_u0 > U2 * (1.0 + _BALL_TOL):
+            return 0
+        rho = np.sqrt(max(U2 - n_u0, 0.0))
+        dist = np.sqrt(max(n_pi - n_u0, 0.0))
+        if rho <= 0.0 or dist <= 0.0:
+            cand[:D] = u0[:D]
+            return 1
+        for k in range(D):
+            cand[k] = u0[k] + (rho / dist) * (pi[k] - u0[k])
+        mu = dist / rho - 1.0  # ball multiplier; the linear ones are then y1 + mu y
+    for a in range(s):
+        if y1[a] + mu * y[a] < 0.0:
+            return 1
+    return 2
+
+
+@njit(cache=True, nogil=True)
+def _project(un, G, b, K, U, D, ftol, W, idx, cand, out):
+    """Nearest feasible candidate to un into out; True if one exists. Stops at the first
+    feasible candidate with non-negative multipliers (the unique KKT point)."""
+    best = np.inf
+    hint = idx[4:5]  # idx[:s] holds the subset, s <= 3 here
+    hint[0] = 0
+    for s in range(min(D, K) + 1):
+        for a in range(s):
+            idx[a] = a
+        while True:
+            kind = _projection_candidate(un, G, b, idx, s, U, D, W, cand)
+            if kind > 0:
+                n2 = 0.0
+                d2 = 0.0
+                for k in range(D):
+                    n2 += cand[k] * cand[k]
+                    d2 += (cand[k] - un[k]) ** 2
+                ok = (d2 < best or kind == 2) and n2 <= U * U * (1.0 + _BALL_TOL)
+                if ok and _feasible(G, b, K, D, cand, ftol, hint):
+                    best = d2
+                    out[:D] = cand[:D]
+                    if kind == 2:
+                        return True
+            if s == 0 or not _next_comb(idx, s, K):
+                break
+    return best < np.inf
+
+
+@njit(cache=True, nogil=True)
+def _margin_candidate(G, b, idx, s, U, D, W, cand):
+    """Maximiser of the common margin of idx[:s] over the ball (module docstring)."""
+    A, L, r, y, c, u0 = W[0], W[1], W[2, 0], W[2, 1], W[2, 2], W[2, 3]
+    i0 = idx[0]
+    h = s - 1
+    for a in range(h):
+        r[a] = b[idx[a + 1]] - b[i0]
+        for k in range(D):
+            A[a, k] = G[idx[a + 1], k] - G[i0, k]
+    if h > 0 and not _factor(A, h, D, L):
+        return False
+    _min_norm(A, h, D, L, r, y, u0)
+    for a in range(h):
+        acc = 0.0
+        for k in range(D):
+            acc += A[a, k] * G[i0, k]
+        r[a] = acc
+    _min_norm(A, h, D, L, r, y, c)
+    n_u0 = 0.0
+    n_c = 0.0
+    for k in range(D):
+        c[k] = G[i0, k] - c[k]
+        n_u0 += u0[k] * u0[k]
+        n_c += c[k] * c[k]
+    if n_u0 > U * U * (1.0 + _BALL_TOL):
+        return False
+    rho = np.sqrt(max(U * U - n_u0, 0.0))
+    scale = rho / np.sqrt(n_c) if n_c > 1e-24 else 0.0
+    for k in range(D):
+        cand[k] = u0[k] + scale * c[k]
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _margin_above(G, b, K, D, u, floor, hint):
+    """Smallest margin of u, or -inf as soon as one margin is <= floor (constraint hint[0]
+    first, as in _feasible)."""
+    h = hint[0]
+    m = np.inf
+    for i in range(K + 1 if K > 0 else 0):
+        k = h if i == 0 else i - 1
+        if i > 0 and k == h:
+            continue
+        acc = -b[k]
+        for j in range(D):
+            acc += G[k, j] * u[j]
+        if acc <= floor:
+            hint[0] = k
+            return -np.inf
+        m = min(m, acc)
+    return m
+
+
+@njit(cache=True, nogil=True)
+def _max_margin(G, b, K, U, D, W, idx, cand, out):
+    """t* (module docstring) and a maximiser into out."""
+    best = -np.inf
+    hint = np.zeros(1, np.int64)
+    for s in range(1, min(D + 1, K) + 1):
+        for a in range(s):
+            idx[a] = a
+        while True:
+            if _margin_candidate(G, b, idx, s, U, D, W, cand):
+                t = _margin_above(G, b, K, D, cand, best, hint)
+                if t > best:
+                    best = t
+                    out[:D] = cand[:D]
+            if not _next_comb(idx, s, K):
+                break
+    return best
+
+
+@njit(cache=True, nogil=True)
+def _solve(un, G, b, K, U, D, W, idx, cand, u_best, out):
+    """The filter's QCQP for one agent; returns (status, t*) and writes the command to out.
+
+    W: scratch (4, 4, 4); idx: (5,) int; cand, u_best: (3,). b is shifted in place by t*
+    when the problem is infeasible (the caller's constraint buffer)."""
+    n2 = 0.0
+    for k in range(D):
+        n2 += un[k] * un[k]
+    scale = 1.0 + np.sqrt(n2)
+    for k in range(K):
+        scale = max(scale, 1.0 + abs(b[k]))
+    ftol = 1e-9 * scale
+    if n2 <= U * U and _margin(G, b, K, D, un) >= 0.0:
+        out[:D] = un[:D]
+        return STATUS_NOMINAL, np.inf
+    hopeless = False  # a constraint asking for more than U along a unit normal
+    for k in range(K):
+        hopeless |= b[k] > U + ftol
+    if not hopeless and _project(un, G, b, K, U, D, ftol, W, idx, cand, out):
+        return STATUS_PROJECTED, 0.0
+    t = _max_margin(G, b, K, U, D, W, idx, cand, u_best)
+    for k in range(K):
+        b[k] += t
+    if not _project(un, G, b, K, U, D, ftol, W, idx, cand, out):
+        out[:D] = u_best[:D]  # the max-margin set is this one point (up to ftol)
+    return (STATUS_INFEASIBLE if t < -ftol else STATUS_PROJECTED), t
+
+
+@njit(cache=True, nogil=True)
+def _sigma_min(e, v, eps, a, T, c, lam):
+    """(H, sigma_min): the barrier and the smallest line-of-sight relative acceleration
+    that keeps H(next) >= (1 - lam) H and e(next) >= min(e, 0) (module docstring)."""
+    beta = (c - 0.5) * a * T
+    H = np.sign(e) * np.sqrt(2.0 * a * abs(e)) + v + beta
+    K = v - eps + beta - (1.0 - lam) * H
+    cT2 = c * T * T
+    s0 = -(e + T * v) / cT2  # sigma at which the projected next distance is D_s
+    R0 = -(T * s0 + K)
+    Ac = a * c * T
+    R = abs(R0)
+    z = R * R / (T * (R + Ac + np.sqrt(Ac * (2.0 * R + Ac))))
+    s_b = s0 + z if R0 >= 0.0 else s0 - z
+    s_a = s0 + min(e, 0.0) / cT2
+    return H, max(s_a, s_b)
+
+
+@njit(cache=True, nogil=True)
+def _constraints(b, i, q, p, f, coop, Ds, alpha, A_o, R2, lam, T, c, U, G, rhs, n):
+    """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok)."""
+    N, D = q.shape[1], q.shape[2]
+    K = 0
+    hmin = np.inf
+    fn = 0.0
+    for k in range(D):
+        fn += f[k] * f[k]
+    fn = np.sqrt(fn)
+    if not np.isfinite(fn):
+        return 0, np.nan, False
+    for j in range(N):
+        if j == i:
+            continue
+        d2 = 0.0
+        w2 = 0.0
+        for k in range(D):
+            d2 += (q[b, i, k] - q[b, j, k]) ** 2
+            w2 += (p[b, i, k] - p[b, j, k]) ** 2
+        if not (np.isfinite(d2) and np.isfinite(w2)):
+            return 0, np.nan, False
+        if d2 >= R2:
+            continue
+        d = np.sqrt(d2)
+        for k in range(D):
+            n[k] = (q[b, i, k] - q[b, j, k]) / d if d > 0.0 else 0.0
+        if d == 0.0:  # coincident: any direction, opposite for the two UAVs
+            n[0] = 1.0 if i < j else -1.0
+        v = 0.0
+        nf = 0.0
+        for k in range(D):
+            v += n[k] * (p[b, i, k] - p[b, j, k])
+            nf += n[k] * f[k]
+        a = 2.0 * alpha if coop[j] else alpha - A_o
+        eps = 0.0
+        if c < 1.0:  # rotation of n within the step (docs/safety.md)
+            amax = 2.0 * (fn + U) if coop[j] else fn + U + A_o
+            geo = min(2.0, 2.0 * T * (np.sqrt(w2) + c * T * amax) / (d + min(d, Ds)))
+            eps = (1.0 - c) * T * amax * geo
+        H, smin = _sigma_min(d - Ds, v, eps, a, T, c, lam)
+        hmin = min(hmin, H)
+        need = 0.5 * smin if coop[j] else smin + A_o
+        if need - nf <= -U:
+            continue  # implied by ||u|| <= U
+        for k in range(D):
+            G[K, k] = n[k]
+        rhs[K] = need - nf
+        K += 1
+    return K, hmin, True
+
+
+@njit(cache=True, nogil=True)
+def _filter_kernel(q, p, f, un, agents, coop, pr, u, active, corr, infeas, hmin):
+    B, M, D = un.shape
+    N = q.shape[1]
+    Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
+    G = np.zeros((max(N, 1), 3))
+    rhs = np.zeros(max(N, 1))
+    W = np.zeros((4, 4, 4))
+    idx = np.zeros(5, np.int64)
+    cand = np.zeros(3)
+    best = np.zeros(3)
+    uin = np.zeros(3)
+    uo = np.zeros(3)
+    nv = np.zeros(3)
+    for b in range(B):
+        for m in range(M):
+            K, h, ok = _constraints(
+                b, agents[m], q, p, f[b, m], coop, Ds, alpha, A_o, R2, lam, T, c, U, G, rhs, nv
+            )
+            hmin[b, m] = h
+            for k in range(D):
+                uin[k] = un[b, m, k]
+            violated = True
+            if ok:
+                violated = _margin(G, rhs, K, D, uin) < 0.0
+                status, _ = _solve(uin, G, rhs, K, U, D, W, idx, cand, best, uo)
+            else:  # non-finite state (a diverged swarm): pass the command through
+                status = STATUS_INFEASIBLE
+                uo[:D] = uin[:D]
+            dc = 0.0
+            for k in range(D):
+                u[b, m, k] = uo[k]
+                dc += (uo[k] - uin[k]) ** 2
+            corr[b, m] = np.sqrt(dc)
+            active[b, m] = violated or status == STATUS_INFEASIBLE
+            infeas[b, m] = status == STATUS_INFEASIBLE

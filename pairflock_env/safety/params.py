@@ -1,0 +1,142 @@
+"""The safety filter's parameters: a small frozen object built from scalars."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+from typing import Any
+
+__all__ = ["INTEGRATORS", "SafetyParams"]
+
+#: particle integrators the discrete-time barrier is derived for (see docs/safety.md)
+INTEGRATORS = ("semi_implicit", "exact")
+
+
+def _real(name: str, v: Any) -> float:
+    if isinstance(v, bool) or not isinstance(v, numbers.Real):
+        raise TypeError(f"{name}={v!r} is invalid: must be a real number")
+    x = float(v)
+    if not math.isfinite(x):
+        raise ValueError(f"{name}={v!r} is invalid: must be finite")
+    return x
+
+
+@dataclasses.dataclass(frozen=True)
+class SafetyParams:
+    """Parameters of the braking-distance CBF filter (units in each field's doc).
+
+    ``brake_accel`` and ``other_accel`` default to 0.5 and 0.1 of ``accel_limit``. Every
+    field is validated on construction (``TypeError`` for a non-number, ``ValueError`` for a
+    bad value); :meth:`from_config` takes ``accel_limit``, ``dt``, ``substeps`` and
+    ``integrator`` from an env config.
+    """
+
+    accel_limit: float
+    """U (m/s^2): bound on the magnitude ||u|| of the filtered pair command (a ball, not a
+    box); the filter's output always satisfies it."""
+    safety_distance: float = 1.0
+    """D_s (m): the distance every paired UAV keeps from every other UAV."""
+    brake_accel: float | None = None
+    """alpha (m/s^2): the line-of-sight deceleration a paired UAV counts on from its own
+    acceleration f_i + u_i when it has to brake; 0 < alpha <= accel_limit. None: 0.5 U."""
+    other_accel: float | None = None
+    """A_o (m/s^2): assumed bound on an unpaired UAV's acceleration towards the agent
+    (n . a_j <= A_o; for ``integrator="exact"`` or ``substeps > 1`` on its norm);
+    0 <= A_o < alpha. None: 0.1 U."""
+    sensing_radius: float = 20.0
+    """R_s (m): an agent constrains itself against the UAVs closer than this (> D_s)."""
+    decay: float = 0.5
+    """lambda in (0, 1]: the discrete barrier condition is H(k+1) >= (1 - lambda) H(k);
+    1 allows the state onto the braking curve in one step, smaller values approach it
+    geometrically."""
+    dt: float = 0.01
+    """T (s): control period over which the command is held (zero-order hold)."""
+    substeps: int = 1
+    """Physics steps per control period of the semi-implicit Euler integrator."""
+    integrator: str = "semi_implicit"
+    """The env's particle integrator: ``"semi_implicit"`` or ``"exact"``."""
+
+    def __post_init__(self) -> None:
+        put = object.__setattr__
+        U = _real("accel_limit", self.accel_limit)
+        if U <= 0:
+            raise ValueError(f"accel_limit={self.accel_limit!r} is invalid: must be > 0")
+        put(self, "accel_limit", U)
+        for name in ("safety_distance", "dt"):
+            v = _real(name, getattr(self, name))
+            if v <= 0:
+                raise ValueError(f"{name}={getattr(self, name)!r} is invalid: must be > 0")
+            put(self, name, v)
+        a = 0.5 * U if self.brake_accel is None else _real("brake_accel", self.brake_accel)
+        if not 0 < a <= U:
+            raise ValueError(
+                f"brake_accel={self.brake_accel!r} is invalid: must be in (0, accel_limit={U}]"
+            )
+        put(self, "brake_accel", a)
+        o = 0.1 * U if self.other_accel is None else _real("other_accel", self.other_accel)
+        if not 0 <= o < a:
+            raise ValueError(
+                f"other_accel={self.other_accel!r} is invalid: must be in [0, brake_accel={a})"
+            )
+        put(self, "other_accel", o)
+        r = _real("sensing_radius", self.sensing_radius)
+        if not r > self.safety_distance:
+            raise ValueError(
+                f"sensing_radius={self.sensing_radius!r} is invalid: must exceed "
+                f"safety_distance={self.safety_distance}"
+            )
+        put(self, "sensing_radius", r)
+        lam = _real("decay", self.decay)
+        if not 0 < lam <= 1:
+            raise ValueError(f"decay={self.decay!r} is invalid: must be in (0, 1]")
+        put(self, "decay", lam)
+        s = self.substeps
+        if isinstance(s, bool) or not isinstance(s, numbers.Integral):
+            raise TypeError(f"substeps={s!r} is invalid: must be an integer >= 1")
+        if int(s) < 1:
+            raise ValueError(f"substeps={s!r} is invalid: must be an integer >= 1")
+        put(self, "substeps", int(s))
+        if not isinstance(self.integrator, str) or self.integrator not in INTEGRATORS:
+            raise ValueError(
+                f"integrator={self.integrator!r} is invalid: must be one of {INTEGRATORS}"
+            )
+
+    @classmethod
+    def from_config(cls, config: Any, **overrides: Any) -> SafetyParams:
+        """Parameters for an env config: ``accel_limit = pair_accel_limit`` and the config's
+        ``dt``, ``substeps``, ``integrator``; keyword ``overrides`` replace any field."""
+        kw = dict(
+            accel_limit=config.pair_accel_limit,
+            dt=config.dt,
+            substeps=config.substeps,
+            integrator=config.integrator,
+        )
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(overrides) - names)
+        if unknown:
+            raise TypeError(f"unknown safety parameter(s) {unknown}; valid: {sorted(names)}")
+        kw.update(overrides)
+        return cls(**kw)
+
+    @property
+    def position_gain(self) -> float:
+        """c of the held-command position update x+ = x + T w + c T^2 a: (S + 1) / (2 S)
+        for S semi-implicit substeps, 1/2 for the exact integrator."""
+        if self.integrator == "exact":
+            return 0.5
+        return (self.substeps + 1) / (2 * self.substeps)
+
+    def barrier_accel(self, cooperative: bool) -> float:
+        """alpha_ij (m/s^2) of the barrier against a UAV: 2 alpha for another filtered UAV
+        (each brakes alpha), alpha - A_o for an unpaired one."""
+        return 2 * self.brake_accel if cooperative else self.brake_accel - self.other_accel
+
+    def required_sensing_radius(self, closing_speed: float, cooperative: bool = False) -> float:
+        """Smallest R_s (m) such that a UAV closing at ``closing_speed`` (m/s) or less is
+        first sensed on the safe side of the barrier: D_s + V T + max(0, V - beta)^2 /
+        (2 alpha_ij), beta = (c - 1/2) alpha_ij T (docs/safety.md)."""
+        v = _real("closing_speed", closing_speed)
+        a = self.barrier_accel(cooperative)
+        beta = (self.position_gain - 0.5) * a * self.dt
+        return self.safety_distance + v * self.dt + max(0.0, v - beta) ** 2 / (2 * a)

@@ -1,0 +1,429 @@
+"""The CBF safety filter: its exact solver against reference solvers, the derivation's
+inequalities, forward invariance in a sampled-data double-integrator simulation, batching
+and edge cases (docs/safety.md)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import clarabel
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from qpsolvers import solve_qp
+from scipy.optimize import minimize, nnls
+
+from pairflock_env import make_config
+from pairflock_env.safety import (
+    STATUS_INFEASIBLE,
+    STATUS_NOMINAL,
+    STATUS_PROJECTED,
+    SafetyFilter,
+    SafetyParams,
+    max_margin,
+    project,
+    safety_filter,
+)
+from pairflock_env.safety._kernels import _sigma_min
+
+# ----------------------------------------------------------------------------- references
+
+
+def _clarabel(P, q, A, h, cones):
+    s = clarabel.DefaultSettings()
+    s.verbose = False
+    s.tol_gap_abs = s.tol_gap_rel = s.tol_feas = 1e-10
+    sol = clarabel.DefaultSolver(sp.csc_matrix(P), q, sp.csc_matrix(A), h, cones, s).solve()
+    assert str(sol.status) in ("Solved", "AlmostSolved")
+    return np.array(sol.x)
+
+
+def _ball_rows(K, D):
+    """Constraint rows of G u >= b (as -G u + s = -b, s >= 0) and of ||u|| <= U (SOC)."""
+    return [clarabel.NonnegativeConeT(K), clarabel.SecondOrderConeT(D + 1)]
+
+
+def ref_qcqp(un, G, b, U):
+    """Clarabel (conic interior point), then SciPy's SQP started there: an interior point
+    solution is accurate to about sqrt(gap) along the sphere, the SQP polish to ~1e-9."""
+    K, D = G.shape
+    A = np.vstack([-G, np.zeros((1, D)), -np.eye(D)])
+    h = np.concatenate([-b, [U], np.zeros(D)])
+    x = _clarabel(np.eye(D), -un, A, h, _ball_rows(K, D))
+    cons = [
+        {"type": "ineq", "fun": lambda z: G @ z - b, "jac": lambda z: G},
+        {"type": "ineq", "fun": lambda z: np.array([U * U - z @ z]), "jac": lambda z: -2 * z[None]},
+    ]
+    r = minimize(
+        lambda z: 0.5 * np.sum((z - un) ** 2),
+        x,
+        jac=lambda z: z - un,
+        constraints=cons,
+        method="SLSQP",
+        options={"ftol": 1e-15, "maxiter": 200},
+    )
+    return r.x
+
+
+def ref_margin(G, b, U):
+    """max t s.t. G u - t >= b, ||u|| <= U, by Clarabel (an SOCP with a linear objective)."""
+    K, D = G.shape
+    A = np.vstack(
+        [
+            np.hstack([-G, np.ones((K, 1))]),
+            np.zeros((1, D + 1)),
+            np.hstack([-np.eye(D), np.zeros((D, 1))]),
+        ]
+    )
+    h = np.concatenate([-b, [U], np.zeros(D)])
+    q = np.zeros(D + 1)
+    q[-1] = -1.0
+    return _clarabel(np.zeros((D + 1, D + 1)), q, A, h, _ball_rows(K, D))[-1]
+
+
+def check_kkt(u, un, G, b, U, tol=1e-8):
+    """Primal feasibility and nonnegative multipliers with zero stationarity residual."""
+    assert (G @ u - b).min() >= -tol and np.linalg.norm(u) <= U * (1 + 1e-12)
+    act = np.abs(G @ u - b) <= tol
+    cols = [G[act].T] + ([-u[:, None]] if abs(np.linalg.norm(u) - U) <= tol else [])
+    lam, res = nnls(np.hstack(cols), u - un)  # u - u_nom = sum lam_k g_k - mu u
+    assert res <= 1e-7, (res, lam)
+
+
+def random_instance(rng, degenerate=0.2):
+    D = int(rng.integers(2, 4))
+    K = int(rng.integers(1, 8))
+    G = rng.normal(size=(K, D))
+    G /= np.linalg.norm(G, axis=1, keepdims=True)
+    if rng.random() < degenerate:  # opposite or repeated normals (UAVs on both sides)
+        G[-1] = -G[0] if rng.random() < 0.5 else G[0]
+    return rng.normal(size=D) * 3, G, rng.normal(size=K) * 2, rng.uniform(0.5, 5.0)
+
+
+# ----------------------------------------------------------------------------- the solver
+
+
+def test_polytope_instances_match_qpsolvers():
+    rng = np.random.default_rng(1)
+    n = 0
+    while n < 300:
+        un, G, b, _ = random_instance(rng)
+        u_feas = rng.normal(size=un.size)  # make the polytope non-empty
+        b = np.minimum(b, G @ u_feas - rng.uniform(0.0, 0.1, b.size))
+        U = 1e6  # ball far away: projection onto the polytope only
+        u, status, _ = project(un, G, b, U)
+        if status == STATUS_NOMINAL:
+            assert np.array_equal(u, un)
+            continue
+        assert status == STATUS_PROJECTED
+        for solver in ("daqp", "quadprog"):
+            ref = solve_qp(np.eye(un.size), -un, -G, -b, solver=solver)
+            np.testing.assert_allclose(u, ref, atol=1e-6, rtol=0)
+        check_kkt(u, un, G, b, U)
+        n += 1
+
+
+def test_ball_instances_match_clarabel():
+    rng = np.random.default_rng(2)
+    n_ball = 0
+    for _ in range(900):
+        un, G, b, U = random_instance(rng)
+        U *= 0.5  # the bound active more often
+        u, status, _ = project(un, G, b, U)
+        if status != STATUS_PROJECTED:
+            continue
+        np.testing.assert_allclose(u, ref_qcqp(un, G, b, U), atol=1e-6, rtol=0)
+        check_kkt(u, un, G, b, U)
+        n_ball += abs(np.linalg.norm(u) - U) < 1e-9
+    assert n_ball >= 200  # the bound was active in a few hundred of them
+
+
+def test_infeasible_instances_maximise_the_smallest_margin():
+    rng = np.random.default_rng(3)
+    n = 0
+    for _ in range(600):
+        un, G, b, U = random_instance(rng)
+        u, status, t = project(un, G, b, U)
+        if status != STATUS_INFEASIBLE:
+            continue
+        n += 1
+        t_ref = ref_margin(G, b, U)
+        assert t < 0 and t == pytest.approx(t_ref, abs=1e-6)
+        assert max_margin(G, b, U)[0] == t
+        # the output achieves t* within the bound, and is the nearest such command (the
+        # max-margin set is often a single point, where an interior point solver is only
+        # accurate to ~1e-6)
+        assert (G @ u - b).min() >= t - 1e-8 and np.linalg.norm(u) <= U * (1 + 1e-12)
+        K, D = G.shape
+        A = np.vstack([-G, np.zeros((1, D)), -np.eye(D)])
+        h = np.concatenate([-(b + t), [U], np.zeros(D)])
+        ref = _clarabel(np.eye(D), -un, A, h, _ball_rows(K, D))
+        assert np.linalg.norm(u - un) <= np.linalg.norm(ref - un) + 1e-5
+    assert n >= 200
+
+
+def test_solver_examples_and_bad_input():
+    # two halfspaces u_x >= 1 and u_x <= -1: infeasible, best margin -1 on the line u_x = 0
+    u, status, t = project([3.0, 2.0], [[1, 0], [-1, 0]], [1, 1], 10.0)
+    assert status == STATUS_INFEASIBLE and t == -1.0
+    np.testing.assert_allclose(u, [0.0, 2.0])
+    # nominal outside the ball only: radial projection
+    u, status, _ = project([30.0, 40.0], np.zeros((0, 2)), [], 5.0)
+    assert status == STATUS_PROJECTED
+    np.testing.assert_allclose(u, [3.0, 4.0])
+    with pytest.raises(ValueError, match="unit vectors"):
+        project([0.0, 0.0], [[2.0, 0.0]], [1.0], 1.0)
+    with pytest.raises(ValueError, match="U="):
+        project([0.0, 0.0], [[1.0, 0.0]], [1.0], -1.0)
+
+
+# ----------------------------------------------------------------------------- the barrier
+
+
+def _next_ok(s, e, v, eps, a, T, c, lam, H, slack):
+    """The discrete barrier condition for the projected next state under sigma = s."""
+    beta = (c - 0.5) * a * T
+    e1, v1 = e + T * v + c * T * T * s, v + T * s - eps
+    H1 = np.sign(e1) * np.sqrt(2 * a * abs(e1)) + v1 + beta
+    return e1 >= min(e, 0) - slack and (1 - lam) * H - slack <= H1
+
+
+def test_sigma_min_is_the_exact_threshold():
+    """sigma_min is the smallest sigma whose projected next state keeps H+ >= (1-lam) H and
+    e+ >= min(e, 0); full braking satisfies it whenever H >= 0 (recursive feasibility)."""
+    rng = np.random.default_rng(4)
+    for _ in range(2000):
+        e = rng.choice([0.0, rng.exponential(5.0), -rng.exponential(0.5)])
+        v, eps = rng.normal(0, 30), rng.choice([0.0, rng.exponential(1.0)])
+        a, T, c, lam = rng.uniform(1, 500), 0.01, rng.choice([1.0, 0.75, 0.5]), rng.uniform(0.1, 1)
+        H, smin = _sigma_min(e, v, eps, a, T, c, lam)
+        H_ref = np.sign(e) * np.sqrt(2 * a * abs(e)) + v + (c - 0.5) * a * T
+        assert np.isfinite(smin) and abs(H - H_ref) <= 1e-12 * (1 + abs(H_ref))
+        tol = 1e-9 * (1 + abs(smin) * T * T + abs(v) + a * T)
+        assert _next_ok(smin, e, v, eps, a, T, c, lam, H, tol)
+        assert not _next_ok(smin - 1e-6 * (1 + abs(smin)), e, v, eps, a, T, c, lam, H, -tol)
+        if H >= 0 and e >= 0 and eps == 0:
+            assert smin <= a * (1 + 1e-12)
+
+
+@pytest.mark.parametrize("S", [1, 3])
+def test_projection_bounds_of_the_next_state(S):
+    """d+ >= d + T v + c T^2 sigma always; v+ >= v + T sigma for one semi-implicit step."""
+    rng = np.random.default_rng(5)
+    T, h = 0.01, 0.01 / S
+    for _ in range(2000):
+        D = int(rng.integers(2, 4))
+        x, w, da = rng.normal(0, 3, D), rng.normal(0, 50, D), rng.normal(0, 500, D)
+        d = np.linalg.norm(x)
+        n = x / d
+        x1, w1 = x.copy(), w.copy()
+        for _ in range(S):
+            w1 += da * h
+            x1 += w1 * h
+        c = (S + 1) / (2 * S)
+        sig = n @ da
+        assert np.linalg.norm(x1) >= d + T * (n @ w) + c * T * T * sig - 1e-12
+        if S == 1:
+            assert (x1 @ w1) / np.linalg.norm(x1) >= n @ w + T * sig - 1e-9
+
+
+# ----------------------------------------------------------------------------- invariance
+
+
+def simulate(
+    seed, *, D=2, n_agents=1, n_obs=3, S=1, exact=False, factor=1.0, steps=300, rand=False
+):
+    """Agents push at the bound straight at the nearest UAV; obstacles (unpaired) accelerate
+    at factor * other_accel towards the nearest agent (or, ``rand``, in a random direction
+    with a random magnitude up to that); zero-order hold, the env's integrator.
+    Returns per-swarm: min distance of an agent to any UAV over the run, whether the start
+    was safe (every H >= 0), and the step of the first report (infeasible or H < 0)."""
+    rng = np.random.default_rng(seed)
+    B, U, T = 48, 100.0, 0.01
+    integ = "exact" if exact else "semi_implicit"
+    P = SafetyParams(accel_limit=U, sensing_radius=1e3, substeps=S, integrator=integ)
+    P = dataclasses.replace(P, decay=float(rng.uniform(0.1, 1.0)))
+    N = n_agents + n_obs
+    ag = np.arange(n_agents)
+    filt = SafetyFilter(P, ag, N)
+    q, p = rng.uniform(-20, 20, (B, N, D)), rng.normal(0, 5, (B, N, D))
+    out = filt.allocate(B, D)
+    dmin = np.full(B, np.inf)
+    report = np.full(B, steps + 1)
+    first_bad = np.full(B, steps + 1)
+    for k in range(steps + 1):
+        x = q[:, None] - q[:, ag, None]  # (B, M, N, D) agent -> every UAV
+        dist = np.linalg.norm(x, axis=-1)
+        dist[:, ag, ag] = np.inf
+        dmin = np.minimum(dmin, dist.min(axis=(1, 2)))
+        first_bad = np.where((dist.min(axis=(1, 2)) < 1.0) & (first_bad > k), k, first_bad)
+        tgt = np.take_along_axis(x, dist.argmin(-1)[..., None, None], axis=2)[:, :, 0]
+        un = U * tgt / np.linalg.norm(tgt, axis=-1, keepdims=True)
+        f = rng.normal(size=(B, n_agents, D))  # own flocking part, |f| <= U - alpha
+        f *= (U - P.brake_accel) * rng.uniform(0, 1, (B, n_agents, 1))
+        f /= np.linalg.norm(f, axis=-1, keepdims=True)
+        filt.apply(q, p, f, un, out)
+        if k == 0:
+            safe0 = (out.barrier.min(axis=1) >= 0) & (dmin >= 1.0)
+        flagged = out.infeasible.any(1) | (out.barrier.min(1) < 0)
+        report = np.where(flagged & (report > k), k, report)
+        a = np.zeros((B, N, D))
+        a[:, ag] = f + out.u
+        xo = q[:, None, ag] - q[:, n_agents:, None]  # obstacle -> agents
+        towards = np.take_along_axis(
+            xo, np.linalg.norm(xo, axis=-1).argmin(-1)[..., None, None], axis=2
+        )[:, :, 0]
+        if rand:
+            towards = rng.normal(size=towards.shape)
+        size = rng.uniform(0, 1, (B, n_obs, 1)) if rand else 1.0
+        unit = towards / np.linalg.norm(towards, axis=-1, keepdims=True)
+        a[:, n_agents:] = factor * P.other_accel * size * unit
+        if exact:
+            q += p * T + 0.5 * T * T * a
+            p += a * T
+        else:
+            for _ in range(S):
+                p += a * (T / S)
+                q += p * (T / S)
+    return dmin, safe0, report, first_bad
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [
+        dict(n_obs=1),
+        dict(n_agents=2, n_obs=0),
+        dict(D=3, n_obs=1),
+        dict(n_obs=3),
+        dict(n_obs=3, rand=True),
+        dict(D=3, n_agents=2, n_obs=3),
+        dict(D=3, n_agents=2, n_obs=2, rand=True),
+        dict(n_obs=2, S=4),
+        dict(n_obs=2, exact=True),
+    ],
+    ids=lambda kw: ",".join(f"{k}={v}" for k, v in kw.items()),
+)
+def test_forward_invariance_under_the_assumptions(kw):
+    """Every swarm that starts safe keeps >= D_s for as long as the filter stays feasible;
+    with one obstacle or only the pair (c = 1) it is always feasible."""
+    dmin, safe0, report, _ = simulate(7, **kw)
+    kept = safe0 & (report > 300)
+    assert kept.sum() >= 24  # not vacuous
+    assert dmin[kept].min() >= 1.0 - 1e-9
+    if kw.get("n_obs", 0) + kw.get("n_agents", 1) == 2 and "S" not in kw and "exact" not in kw:
+        assert not (safe0 & (report <= 300)).any()
+        assert dmin[safe0].min() >= 1.0 - 1e-9
+
+
+def test_violated_assumption_is_reported():
+    """Obstacles accelerating at 3x other_accel break the guarantee: every swarm that gets
+    closer than D_s was flagged (infeasible or a negative barrier) no later than that."""
+    dmin, safe0, report, first_bad = simulate(8, n_obs=2, factor=3.0)
+    hit = safe0 & (dmin < 1.0)
+    assert hit.sum() >= 5
+    assert (report[hit] <= first_bad[hit]).all()
+
+
+# ----------------------------------------------------------------------------- batching, edges
+
+
+def _random_state(rng, B, N, D):
+    return rng.uniform(-4, 4, (B, N, D)), rng.normal(0, 10, (B, N, D))
+
+
+def test_batched_equals_one_by_one():
+    rng = np.random.default_rng(9)
+    B, N, D = 6, 9, 3
+    P = SafetyParams(accel_limit=60.0, sensing_radius=6.0)
+    ag = np.array([0, 1, 4, 7])
+    q, p = _random_state(rng, B, N, D)
+    f, un = rng.normal(0, 10, (B, 4, D)), rng.normal(0, 40, (B, 4, D))
+    full = safety_filter(P, q, p, ag, f, un)
+    assert full.active.any() and (~full.active).any()
+    for b in range(B):
+        one = safety_filter(P, q[b : b + 1], p[b : b + 1], ag, f[b : b + 1], un[b : b + 1])
+        for x, y in zip(full.arrays(), one.arrays(), strict=True):
+            assert np.array_equal(x[b : b + 1], y)
+
+
+def test_edge_states_stay_finite():
+    P = SafetyParams(accel_limit=50.0)
+    filt = SafetyFilter(P, [0, 1], 4)
+    q = np.zeros((4, 4, 2))
+    p = np.zeros((4, 4, 2))
+    q[0, 2] = q[0, 0]  # coincident with an unpaired UAV, at rest
+    q[1, 1] = [P.safety_distance, 0.0]  # partner at exactly D_s, at rest
+    q[1, 2:] = [[30.0, 0.0], [0.0, 30.0]]
+    q[2] = [[0, 0], [0, 0], [0, 0], [0, 0]]  # everyone coincident
+    q[3] = [[0, 0], [50, 0], [0, 50], [50, 50]]  # nobody within the sensing radius
+    un = np.full((4, 2, 2), 10.0)
+    out = filt.apply(q, p, np.zeros((4, 2, 2)), un)
+    for arr in (out.u, out.correction):
+        assert np.isfinite(arr).all()
+    assert (np.linalg.norm(out.u, axis=-1) <= P.accel_limit * (1 + 1e-12)).all()
+    assert np.isinf(out.barrier[3]).all() and not out.active[3].any()
+    assert np.array_equal(out.u[3], un[3])
+    # at D_s at rest, pushing towards the partner is blocked, pushing away is not
+    un2 = np.zeros((1, 2, 2))
+    un2[0, 0] = [10.0, 0.0]
+    o2 = filt.apply(q[1:2], p[1:2], np.zeros((1, 2, 2)), un2)
+    assert o2.u[0, 0, 0] <= 1e-9 and o2.active[0, 0] and not o2.infeasible[0, 0]
+    assert np.array_equal(o2.u[0, 1], un2[0, 1])
+    # a diverged (non-finite) state passes the command through, flagged
+    qn = q.copy()
+    qn[0, 3] = np.nan
+    fn = np.zeros((4, 2, 2))
+    fn[1, 0] = np.inf
+    o3 = filt.apply(qn, p, fn, un)
+    assert o3.infeasible[0].all() and np.array_equal(o3.u[0], un[0])
+    assert o3.infeasible[1, 0] and not o3.infeasible[1, 1] and np.isnan(o3.barrier[1, 0])
+
+
+def test_params_validation_and_config():
+    cfg = make_config("paper", pair_accel_limit=50.0)
+    P = SafetyParams.from_config(cfg, sensing_radius=12.0)
+    assert (P.accel_limit, P.brake_accel, P.other_accel, P.dt) == (50.0, 25.0, 5.0, cfg.dt)
+    assert P.position_gain == 1.0
+    assert SafetyParams(accel_limit=1.0, integrator="exact").position_gain == 0.5
+    assert SafetyParams(accel_limit=1.0, substeps=3).position_gain == pytest.approx(2 / 3)
+    r = P.required_sensing_radius(20.0)
+    assert r == pytest.approx(1.0 + 0.2 + (20.0 - 0.5 * 20.0 * 0.01) ** 2 / 40.0)
+    with pytest.raises(TypeError, match="unknown safety parameter"):
+        SafetyParams.from_config(cfg, gamma=1.0)
+    bad = [
+        (dict(accel_limit="1"), TypeError),
+        (dict(accel_limit=0.0), ValueError),
+        (dict(accel_limit=1.0, brake_accel=2.0), ValueError),
+        (dict(accel_limit=1.0, brake_accel=0.5, other_accel=0.5), ValueError),
+        (dict(accel_limit=1.0, sensing_radius=0.5), ValueError),
+        (dict(accel_limit=1.0, decay=0.0), ValueError),
+        (dict(accel_limit=1.0, substeps=1.5), TypeError),
+        (dict(accel_limit=1.0, integrator="rk4"), ValueError),
+        (dict(accel_limit=float("nan")), ValueError),
+    ]
+    for kw, exc in bad:
+        with pytest.raises(exc, match=next(k for k in kw if k != "accel_limit" or len(kw) == 1)):
+            SafetyParams(**kw)
+    filt = SafetyFilter(P, [0, 1], 3)
+    z = np.zeros((1, 3, 2))
+    with pytest.raises(ValueError, match="u_nom"):
+        filt.apply(z, z, np.zeros((1, 2, 2)), np.zeros((1, 3, 2)))
+    with pytest.raises(ValueError, match="agents"):
+        SafetyFilter(P, [0, 3], 3)
+
+
+def test_active_means_a_barrier_constraint_and_correction_its_size():
+    P = SafetyParams(accel_limit=50.0)
+    filt = SafetyFilter(P, [0], 2)
+    q = np.array([[[0.0, 0.0], [10.0, 0.0]]] * 3)
+    p = np.zeros((3, 2, 2))
+    p[2, 0] = [40.0, 0.0]  # closing at 40 m/s from 9 m: must brake
+    un = np.array([[[0.0, 30.0]], [[0.0, 80.0]], [[0.0, 30.0]]])
+    out = filt.apply(q, p, np.zeros((3, 1, 2)), un)
+    assert np.array_equal(out.u[0], un[0]) and out.correction[0, 0] == 0.0
+    assert not out.active[0, 0]
+    # outside the bound only: projected onto the ball, not a safety intervention
+    np.testing.assert_allclose(out.u[1, 0], [0.0, 50.0])
+    assert not out.active[1, 0] and out.correction[1, 0] == pytest.approx(30.0)
+    assert out.active[2, 0] and out.u[2, 0, 0] < 0 and out.barrier[2, 0] < out.barrier[0, 0]
+    assert out.correction[2, 0] == pytest.approx(np.linalg.norm(out.u[2, 0] - un[2, 0]))
