@@ -51,7 +51,7 @@ and by the loader, so training and evaluation cannot drift apart):
         r = - w_error * log(1 + |e| / error_scale) - w_progress * |e| / position_scale
             - w_band * [|e| > band]
             - w_effort * ||a||^2 / dim
-            - w_separation * max(0, safe_distance - s) / safe_distance
+            - w_separation * max(0, separation_distance - s) / separation_distance
             - w_collision * [s < collision_distance]
             - w_cohesion * max(0, s - cohesion_distance) / position_scale
 
@@ -92,6 +92,8 @@ from typing import Any
 import numpy as np
 
 from .config import PairFlockConfig
+from .config.fields import Field, Flag, Int, OrNone, Real, UnknownFieldError
+from .config.schema import Record, Schema, Section, declare_record
 from .observations import ObsLayout
 from .rewards import DIVERGENCE_PENALTY
 
@@ -246,85 +248,160 @@ class WorldInterface(LearningInterface):
         return np.asarray(reward, dtype=np.float64)
 
 
-@dataclasses.dataclass(frozen=True)
-class PairFrameParams:
-    """Parameters of :class:`PairFrameInterface` (units in the field docs)."""
+_SCALE = Real(1e-6, 1e9)
+_W = Real(0.0, 1e6)
+_ACCEL = OrNone(Real(1e-6, 1e6), "the config's pair_accel_limit, then stored")
+_FRAME_SECTION = Section(
+    "pair_frame",
+    "Pair-frame learning interface",
+    'frame="pair" (pairflock_env.learning); give them as frame_params={...}.',
+    (
+        Field(
+            "decision_period",
+            Int(1, 10_000),
+            5,
+            "steps",
+            "Control steps the policy action is held (policy period = decision_period * dt).",
+        ),
+        Field(
+            "accel_scale",
+            _ACCEL,
+            None,
+            "m/s^2",
+            "Acceleration per unit of the policy action along a pair axis; None: the config's "
+            "pair_accel_limit of the env the interface is first built for (then stored).",
+        ),
+        Field(
+            "max_accel",
+            OrNone(Real(1e-6, 1e6), "accel_scale"),
+            None,
+            "m/s^2",
+            "Bound on the magnitude of the applied pair acceleration ||u_i||, kept with the "
+            "model so a policy trained under a limit obeys it in any env (the env's own "
+            "pair_accel_limit applies too, whichever is smaller); None: accel_scale.",
+        ),
+        Field(
+            "feedforward",
+            Flag(),
+            True,
+            "",
+            "Add 1/2 (f_partner - f_self), cancelling the flocking difference on the pair.",
+        ),
+        Field("position_scale", _SCALE, 50.0, "m", "The linear pair-error feature is e / this."),
+        Field("velocity_scale", _SCALE, 50.0, "m/s", "Linear velocity features are v / this."),
+        Field(
+            "fine_position",
+            _SCALE,
+            0.05,
+            "m",
+            "The symlog pair-error feature is symlog(e / fine_position) / 8.",
+        ),
+        Field(
+            "fine_velocity",
+            _SCALE,
+            0.1,
+            "m/s",
+            "The symlog velocity features are symlog(v / fine_velocity) / 8.",
+        ),
+        Field(
+            "neighbor_scale",
+            _SCALE,
+            10.0,
+            "m",
+            "Neighbour offsets and closest-approach distances are divided by this.",
+        ),
+        Field(
+            "tca_horizon",
+            Real(1e-6, 1e3),
+            1.0,
+            "s",
+            "Time to closest approach is clipped to [0, tca_horizon] and divided by it.",
+        ),
+        Field(
+            "threat_neighbors",
+            OrNone(Int(0, 1_000), "min(6, obs_neighbors)"),
+            None,
+            "UAVs",
+            "How many of the config's obs_neighbors nearest UAVs the policy sees, the most "
+            "threatening first (smallest distance at closest approach).",
+        ),
+        Field(
+            "error_scale",
+            _SCALE,
+            0.05,
+            "m",
+            "Accuracy scale of the reward's log(1 + |e| / error_scale).",
+        ),
+        Field("w_error", _W, 0.1, "1", "Weight of log(1 + |e| / error_scale)."),
+        Field("w_progress", _W, 0.1, "1", "Weight of |e| / position_scale."),
+        Field("w_band", _W, 0.0, "1", "Cost per control step while |e| > band."),
+        Field(
+            "band",
+            _SCALE,
+            0.5,
+            "m",
+            "Half-width of the band of the band term (the reproduction's \"into the 0.5 m "
+            'band" time).',
+        ),
+        Field("w_effort", _W, 0.05, "1", "Weight of ||a||^2 / dim (a: the policy action)."),
+        Field(
+            "w_separation",
+            _W,
+            5.0,
+            "1",
+            "Weight of max(0, separation_distance - s) / separation_distance.",
+        ),
+        Field(
+            "separation_distance",
+            Real(1e-3, 1e5),
+            2.0,
+            "m",
+            "Below this distance to a non-partner UAV the separation penalty grows linearly "
+            "(formerly safe_distance).",
+            aliases=("safe_distance",),
+        ),
+        Field(
+            "approach_horizon",
+            Real(0.0, 1e3),
+            0.5,
+            "s",
+            "The separation penalty uses the smaller of the distance now and the closest "
+            "approach to an observed neighbour within this time at constant velocities (0: "
+            "now only).",
+        ),
+        Field("w_collision", _W, 5.0, "1", "Penalty per step while s < collision_distance."),
+        Field(
+            "w_cohesion",
+            _W,
+            0.1,
+            "1",
+            "Weight of max(0, s - cohesion_distance) / position_scale.",
+        ),
+        Field(
+            "cohesion_distance",
+            OrNone(Real(1e-3, 1e7), "the perception radius"),
+            None,
+            "m",
+            "A UAV whose nearest non-partner UAV is farther than this has left the flock.",
+        ),
+    ),
+)
 
-    decision_period: int = 5
-    """Control steps the policy action is held (policy period = decision_period * dt)."""
-    accel_scale: float | None = None
-    """m/s^2 per unit of the policy action along a pair axis; None: the config's
-    ``pair_accel_limit`` of the env the interface is first built for (then stored)."""
-    max_accel: float | None = None
-    """m/s^2: bound on the magnitude of the applied pair acceleration ||u_i||, kept with the
-    model so a policy trained under a limit obeys it in any env (the env's own
-    ``pair_accel_limit`` applies too, whichever is smaller); None: ``accel_scale``."""
-    feedforward: bool = True
-    """Add 1/2 (f_partner - f_self), cancelling the flocking difference on the pair."""
-    position_scale: float = 50.0
-    """m: the linear pair-error feature is e / position_scale."""
-    velocity_scale: float = 50.0
-    """m/s: linear velocity features are v / velocity_scale."""
-    fine_position: float = 0.05
-    """m: the symlog pair-error feature is symlog(e / fine_position) / 8."""
-    fine_velocity: float = 0.1
-    """m/s: the symlog velocity features are symlog(v / fine_velocity) / 8."""
-    neighbor_scale: float = 10.0
-    """m: neighbour offsets and closest-approach distances are divided by this."""
-    tca_horizon: float = 1.0
-    """s: time to closest approach is clipped to [0, tca_horizon] and divided by it."""
-    threat_neighbors: int | None = None
-    """How many of the config's ``obs_neighbors`` nearest UAVs the policy sees, the most
-    threatening first (smallest distance at closest approach); None: min(6, obs_neighbors)."""
-    error_scale: float = 0.05
-    """m: accuracy scale of the reward's log(1 + |e| / error_scale)."""
-    w_error: float = 0.1
-    w_progress: float = 0.1
-    w_band: float = 0.0
-    band: float = 0.5
-    """m: the band term costs w_band per control step while |e| > band (the reproduction's
-    "into the 0.5 m band" time)."""
-    w_effort: float = 0.05
-    w_separation: float = 5.0
-    safe_distance: float = 2.0
-    """m: below this distance to a non-partner UAV the separation penalty grows linearly."""
-    approach_horizon: float = 0.5
-    """s: the separation penalty uses the smaller of the distance now and the closest approach
-    to an observed neighbour within this time at constant velocities (0: now only)."""
-    w_collision: float = 5.0
-    w_cohesion: float = 0.1
-    cohesion_distance: float | None = None
-    """m: a UAV whose nearest non-partner UAV is farther than this has left the flock and pays
-    w_cohesion * (sep - cohesion_distance) / position_scale; None: the perception radius."""
+#: the declared parameters of :class:`PairFrameParams`
+FRAME_SCHEMA = Schema("pair-frame parameter", (_FRAME_SECTION,))
 
-    def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
-            if f.name == "feedforward":
-                if not isinstance(v, (bool, np.bool_)):
-                    raise TypeError(f"feedforward={v!r} is invalid: must be a bool")
-                continue
-            if f.name == "decision_period":
-                object.__setattr__(self, f.name, _check_period(v))
-                continue
-            if f.name == "threat_neighbors":
-                if v is not None:
-                    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
-                        raise ValueError(f"threat_neighbors={v!r} is invalid: an int >= 0 or None")
-                    object.__setattr__(self, f.name, int(v))
-                continue
-            if v is None and f.name in ("accel_scale", "max_accel", "cohesion_distance"):
-                continue
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-                raise TypeError(f"{f.name}={v!r} is invalid: must be a real number")
-            if not np.isfinite(v):
-                raise ValueError(f"{f.name}={v!r} is invalid: must be finite")
-            if f.name.startswith("w_"):
-                if v < 0:
-                    raise ValueError(f"{f.name}={v!r} is invalid: must be >= 0")
-            elif v <= 0:
-                raise ValueError(f"{f.name}={v!r} is invalid: must be > 0")
-            object.__setattr__(self, f.name, float(v))
+PairFrameParams = declare_record(
+    "PairFrameParams",
+    FRAME_SCHEMA,
+    Record,
+    __name__,
+    """Parameters of :class:`PairFrameInterface` (units and ranges: docs/config.md).
+
+    A frozen dataclass with keyword-only construction; unknown names raise ``TypeError`` with
+    a did-you-mean hint, bad values ``ValueError``, each naming the parameter.
+    ``safe_distance`` is the deprecated name of ``separation_distance``.
+    """,
+)
 
 
 _CLIP = 5.0
@@ -342,12 +419,6 @@ class PairFrameInterface(LearningInterface):
 
     def __init__(self, config: PairFlockConfig, **params: Any) -> None:
         super().__init__(config)
-        names = {f.name for f in dataclasses.fields(PairFrameParams)}
-        unknown = sorted(set(params) - names)
-        if unknown:
-            raise ValueError(
-                f"unknown pair-frame parameter(s) {unknown}; valid: {', '.join(sorted(names))}"
-            )
         p = PairFrameParams(**params)
         if p.accel_scale is None:
             p = dataclasses.replace(p, accel_scale=float(config.pair_accel_limit))
@@ -499,7 +570,7 @@ class PairFrameInterface(LearningInterface):
         r = -p.w_error * np.log1p(err / p.error_scale) - p.w_progress * err / p.position_scale
         r -= p.w_band * (err > p.band)
         r -= p.w_effort * np.einsum("...k,...k->...", a, a) / cfg.dim
-        r -= p.w_separation * np.maximum(0.0, p.safe_distance - sep) / p.safe_distance
+        r -= p.w_separation * np.maximum(0.0, p.separation_distance - sep) / p.separation_distance
         r -= p.w_collision * (sep < cfg.collision_distance)
         r -= p.w_cohesion * np.maximum(0.0, sep - p.cohesion_distance) / p.position_scale
         diverged = np.asarray(info["diverged"], dtype=bool)
@@ -511,9 +582,7 @@ class PairFrameInterface(LearningInterface):
 
 
 def _check_period(v: Any) -> int:
-    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-        raise ValueError(f"decision_period={v!r} is invalid: must be an integer >= 1")
-    return int(v)
+    return FRAME_SCHEMA.fields["decision_period"].kind.check("decision_period", v, {})
 
 
 INTERFACES: dict[str, type[LearningInterface]] = {
@@ -524,16 +593,28 @@ INTERFACES: dict[str, type[LearningInterface]] = {
 
 def make_interface(name: str, config: PairFlockConfig, **params: Any) -> LearningInterface:
     """Build the learning interface ``name`` ("world" or "pair") for ``config``."""
-    if not isinstance(name, str) or name not in INTERFACES:
-        raise ValueError(f"frame={name!r} is invalid: must be one of {', '.join(INTERFACES)}")
-    if name == "world" and set(params) - {"decision_period"}:
-        raise ValueError(f"the world frame takes only decision_period, got {sorted(params)}")
+    valid = f"must be one of {', '.join(map(repr, INTERFACES))}"
+    if not isinstance(name, str):
+        raise TypeError(f"frame={name!r} is invalid: {valid}")
+    if name not in INTERFACES:
+        raise ValueError(f"frame={name!r} is invalid: {valid}")
+    extra = sorted(set(params) - {"decision_period"})
+    if name == "world" and extra:
+        raise UnknownFieldError(
+            f"unknown world-frame parameter {extra[0]!r}: the world frame takes only "
+            "decision_period"
+        )
     return INTERFACES[name](config, **params)
 
 
 def interface_from_dict(d: Mapping[str, Any], config: PairFlockConfig) -> LearningInterface:
     """Rebuild an interface stored with :meth:`LearningInterface.to_dict` for ``config``."""
-    if not isinstance(d, Mapping) or "name" not in d:
+    if not isinstance(d, Mapping):
+        raise TypeError(f"interface description {d!r} is invalid: must be a mapping")
+    if "name" not in d:
         raise ValueError(f"interface description {d!r} is invalid: needs a 'name' key")
     params = {k: v for k, v in d.items() if k != "name"}
+    if d["name"] == "pair":
+        # a stored model keeps the parameter names of the release that trained it
+        params = FRAME_SCHEMA.resolve(params, warn=False)
     return make_interface(d["name"], config, **params)
