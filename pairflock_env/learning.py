@@ -430,8 +430,9 @@ class PairFrameInterface(LearningInterface):
             p = dataclasses.replace(p, threat_neighbors=min(6, config.obs_neighbors))
         elif p.threat_neighbors > config.obs_neighbors:
             raise ValueError(
-                f"threat_neighbors={p.threat_neighbors} is invalid: the env observes only "
-                f"obs_neighbors={config.obs_neighbors} UAVs (raise obs_neighbors)"
+                f"threat_neighbors={p.threat_neighbors} is invalid: must be <= the config's "
+                f"obs_neighbors={config.obs_neighbors}, the UAVs the env observes (raise "
+                "obs_neighbors)"
             )
         self.params = p
         self.decision_period = p.decision_period

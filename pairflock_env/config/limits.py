@@ -38,6 +38,7 @@ MAX_WEIGHT = 1e6
 MAX_STEP_PENALTY = 1e15
 MAX_DELAY_BYTES = 256 * 2**20
 MAX_SWARM_BYTES = 2**30
+MAX_PLACEMENT_BYTES = 8 * 2**30
 #: largest packing fraction of the start boxes (see ``initial state`` in docs/config.md)
 MAX_START_DENSITY = {2: 0.3, 3: 0.15}
 
@@ -94,6 +95,14 @@ LIMITS: tuple[Limit, ...] = (
         MAX_SWARM_BYTES,
         "bytes",
         "state, observation and neighbour arrays per swarm (formula in the derived table)",
+    ),
+    Limit(
+        "MAX_PLACEMENT_BYTES",
+        MAX_PLACEMENT_BYTES,
+        "bytes",
+        "temporaries of the random start placement, which compares all pairs of UAVs at once "
+        "(about N^2 (16 dim + 12) bytes; allows 10^4 UAVs); lift it when the placement no "
+        "longer builds N x N arrays",
     ),
     Limit(
         "MAX_START_DENSITY",

@@ -57,7 +57,7 @@ class Turns(Kind):
 
 def _heading_needed(v: Any) -> str | None:
     if v.leader == "climb_and_turn" and v.leader_turns and np.hypot(*v.leader_velocity[:2]) == 0:
-        return "needs a non-zero horizontal part to define a heading for leader_turns"
+        return "must have a non-zero horizontal part to define a heading for leader_turns"
     return None
 
 

@@ -10,10 +10,23 @@ from typing import Any
 import numpy as np
 
 from ..fields import Box, Choice, Field, Kind, Real, Vector, invalid, sequence_items
-from ..limits import MAX_DISTANCE, MAX_GAIN, MAX_POSITION, MAX_START_DENSITY
+from ..limits import (
+    MAX_DISTANCE,
+    MAX_GAIN,
+    MAX_PLACEMENT_BYTES,
+    MAX_POSITION,
+    MAX_START_DENSITY,
+)
 from ..schema import Derived, Rule, Section
 
-__all__ = ["DERIVED", "RULES", "SECTIONS", "corner_diagonals", "start_density"]
+__all__ = [
+    "DERIVED",
+    "RULES",
+    "SECTIONS",
+    "corner_diagonals",
+    "placement_bytes",
+    "start_density",
+]
 
 
 class Pairs(Kind):
@@ -145,13 +158,22 @@ def start_density(v: Any) -> float:
     return out
 
 
+def placement_bytes(v: Any) -> int:
+    """Peak bytes of the random start placement's temporaries: the N x N x dim offsets and
+    their squares (float64), the N x N distances (float64) and four N x N masks; 0 when
+    min_init_spacing is 0 (no placement loop)."""
+    if v.min_init_spacing == 0:
+        return 0
+    return v.n_uavs**2 * (16 * v.dim + 12)
+
+
 def _crowded(v: Any) -> str | None:
     phi = start_density(v)
     most = MAX_START_DENSITY[v.dim]
     if phi > most:
         return (
-            f"the start boxes would be packed to {phi:.3g} (ball volume fraction; random "
-            f"placement in {v.dim}-D needs <= {most}): lower min_init_spacing or n_uavs, or "
+            f"packs the start boxes to {phi:.3g} (ball volume fraction), which must be <= "
+            f"{most} in {v.dim}-D for random placement: lower min_init_spacing or n_uavs, or "
             'enlarge swarm_half_width (pair_corner for init="random")'
         )
     return None
@@ -264,6 +286,15 @@ RULES = (
 )
 
 DERIVED = (
+    Derived(
+        "start placement memory",
+        ("n_uavs", "min_init_spacing", "dim"),
+        placement_bytes,
+        0,
+        MAX_PLACEMENT_BYTES,
+        "bytes",
+        "N^2 (16 dim + 12) while min_init_spacing > 0",
+    ),
     Derived(
         "pair_accel_limit^2",
         ("pair_accel_limit",),
