@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from .fields import Field, fmt_num
+from .frame import FRAME_SCHEMA
 from .limits import LIMITS
 from .model import SCHEMA
 from .presets import PRESETS
@@ -121,8 +122,6 @@ def _limits() -> list[str]:
 
 
 def _frame_params() -> list[str]:
-    from ..learning import FRAME_SCHEMA  # the learning layer sits above the config
-
     sec = FRAME_SCHEMA.sections[0]
     out = ["", f"## {sec.title} (`frame_params`)", "", _text(sec.doc), ""]
     head = ["parameter", "type", "unit", "default", "valid", "meaning"]

@@ -82,7 +82,7 @@ REWARD = Section(
             Real(1e-3, MAX_DISTANCE),
             1.0,
             "m",
-            "Separation D below which the separation penalty starts (formerly safe_distance).",
+            "Separation D below which the separation penalty starts.",
             aliases=("safe_distance",),
         ),
         Field(
