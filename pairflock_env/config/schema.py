@@ -3,8 +3,9 @@ built from them.
 
 A :class:`Schema` validates a flat mapping of values in one pass: unknown names raise
 :class:`~.fields.UnknownFieldError` with a did-you-mean hint, old names map to new ones, each
-field is checked by its kind in dependency order (auto defaults filled in), then every
-:class:`Rule` between fields and every :class:`Derived` quantity is checked. A failing rule names
+field is checked by its kind in dependency order (auto defaults filled in), and every
+:class:`Rule` between fields and every :class:`Derived` quantity is checked as soon as the
+fields it reads are (so the first error reported is the earliest one). A failing rule names
 the first of its fields that the user set (its first field when the user set none of them),
 the reason and the values of the other fields involved.
 
