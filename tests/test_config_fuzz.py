@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import math
 import signal
+import threading
 from collections.abc import Iterator
 from typing import Any
 
@@ -170,7 +171,10 @@ def field_values(schema: Any, name: str) -> st.SearchStrategy[Any]:
 @contextlib.contextmanager
 def hang_guard(seconds: int) -> Iterator[None]:
     """Fail (TimeoutError) if the block runs longer than ``seconds`` (where SIGALRM exists)."""
-    if not hasattr(signal, "setitimer"):
+    if (
+        not hasattr(signal, "setitimer")
+        or threading.current_thread() is not threading.main_thread()
+    ):
         yield
         return
 

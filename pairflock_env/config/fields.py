@@ -140,9 +140,13 @@ class Int(Kind):
 
 
 def _to_float(value: Any) -> float:
+    if isinstance(value, float):  # also np.float64
+        return float(value)
     try:
-        with np.errstate(over="ignore"):
-            return float(value)
+        if isinstance(value, np.floating):  # np.longdouble beyond float64 casts to inf
+            with np.errstate(over="ignore"):
+                return float(value)
+        return float(value)
     except OverflowError:  # a Python int beyond the float range
         return math.inf
 

@@ -69,7 +69,7 @@ class Derived:
     def compute(self, v: Any) -> float:
         """The quantity for values ``v``; NaN when it cannot be computed (overflow, 0/0)."""
         try:
-            with np.errstate(all="ignore"):
+            with np.errstate(all="ignore"):  # numpy overflow gives inf, reported below
                 return float(self.value(v))
         except (ArithmeticError, ValueError):
             return math.nan
@@ -200,19 +200,21 @@ class Schema:
         (``auto``) rather than given. ``values`` holds current names only (see
         :meth:`resolve`); ``user_set`` says which of them the user set (for blame)."""
         ctx: dict[str, Any] = {}
+        ns = SimpleNamespace()  # the same values as attributes, for auto and rule functions
         auto: set[str] = set()
         for name in self.order:
             f = self.fields[name]
             if name in values:
                 raw = values[name]
             elif f.auto is not None:
-                raw = f.auto.rule(SimpleNamespace(**ctx))
+                raw = f.auto.rule(ns)
                 auto.add(name)
             else:
                 raw = f.default
             ctx[name] = f.kind.check(name, raw, ctx)
+            setattr(ns, name, ctx[name])
             for rule in self._ready.get(name, ()):
-                why = rule.test(SimpleNamespace(**ctx))
+                why = rule.test(ns)
                 if why is not None:
                     raise self._rule_error(rule.fields, why, ctx, user_set)
         return {name: ctx[name] for name in self.fields}, frozenset(auto)
