@@ -39,7 +39,8 @@ the defaults, and the `paper-quadrotor` column lists only what that preset chang
 did-you-mean hint; a wrong type `TypeError`; a value outside "valid" `ValueError`; each names
 the field, the value and what is valid. The rules between fields and the derived quantities
 below are checked at construction as well, so an accepted config runs: every step stays
-finite and bounded in time and memory (the limits at the end).
+finite and bounded in time and memory (the limits at the end). How to add a field: the
+docstring of `pairflock_env.config`.
 """
 
 
