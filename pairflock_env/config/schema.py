@@ -214,7 +214,10 @@ class Schema:
             ctx[name] = f.kind.check(name, raw, ctx)
             setattr(ns, name, ctx[name])
             for rule in self._ready.get(name, ()):
-                why = rule.test(ns)
+                try:
+                    why = rule.test(ns)
+                except ArithmeticError as e:  # a rule that overflows is broken, not passed
+                    why = f"must keep the rule {rule.doc!r} computable ({e})"
                 if why is not None:
                     raise self._rule_error(rule.fields, why, ctx, user_set)
         return {name: ctx[name] for name in self.fields}, frozenset(auto)
