@@ -51,7 +51,7 @@ and by the loader, so training and evaluation cannot drift apart):
         r = - w_error * log(1 + |e| / error_scale) - w_progress * |e| / position_scale
             - w_band * [|e| > band]
             - w_effort * ||a||^2 / dim
-            - w_separation * max(0, safe_distance - s) / safe_distance
+            - w_separation * max(0, separation_distance - s) / separation_distance
             - w_collision * [s < collision_distance]
             - w_cohesion * max(0, s - cohesion_distance) / position_scale
 
@@ -92,6 +92,8 @@ from typing import Any
 import numpy as np
 
 from .config import PairFlockConfig
+from .config.fields import UnknownFieldError
+from .config.frame import FRAME_SCHEMA, PairFrameParams
 from .observations import ObsLayout
 from .rewards import DIVERGENCE_PENALTY
 
@@ -246,87 +248,6 @@ class WorldInterface(LearningInterface):
         return np.asarray(reward, dtype=np.float64)
 
 
-@dataclasses.dataclass(frozen=True)
-class PairFrameParams:
-    """Parameters of :class:`PairFrameInterface` (units in the field docs)."""
-
-    decision_period: int = 5
-    """Control steps the policy action is held (policy period = decision_period * dt)."""
-    accel_scale: float | None = None
-    """m/s^2 per unit of the policy action along a pair axis; None: the config's
-    ``pair_accel_limit`` of the env the interface is first built for (then stored)."""
-    max_accel: float | None = None
-    """m/s^2: bound on the magnitude of the applied pair acceleration ||u_i||, kept with the
-    model so a policy trained under a limit obeys it in any env (the env's own
-    ``pair_accel_limit`` applies too, whichever is smaller); None: ``accel_scale``."""
-    feedforward: bool = True
-    """Add 1/2 (f_partner - f_self), cancelling the flocking difference on the pair."""
-    position_scale: float = 50.0
-    """m: the linear pair-error feature is e / position_scale."""
-    velocity_scale: float = 50.0
-    """m/s: linear velocity features are v / velocity_scale."""
-    fine_position: float = 0.05
-    """m: the symlog pair-error feature is symlog(e / fine_position) / 8."""
-    fine_velocity: float = 0.1
-    """m/s: the symlog velocity features are symlog(v / fine_velocity) / 8."""
-    neighbor_scale: float = 10.0
-    """m: neighbour offsets and closest-approach distances are divided by this."""
-    tca_horizon: float = 1.0
-    """s: time to closest approach is clipped to [0, tca_horizon] and divided by it."""
-    threat_neighbors: int | None = None
-    """How many of the config's ``obs_neighbors`` nearest UAVs the policy sees, the most
-    threatening first (smallest distance at closest approach); None: min(6, obs_neighbors)."""
-    error_scale: float = 0.05
-    """m: accuracy scale of the reward's log(1 + |e| / error_scale)."""
-    w_error: float = 0.1
-    w_progress: float = 0.1
-    w_band: float = 0.0
-    band: float = 0.5
-    """m: the band term costs w_band per control step while |e| > band (the reproduction's
-    "into the 0.5 m band" time)."""
-    w_effort: float = 0.05
-    w_separation: float = 5.0
-    safe_distance: float = 2.0
-    """m: below this distance to a non-partner UAV the separation penalty grows linearly."""
-    approach_horizon: float = 0.5
-    """s: the separation penalty uses the smaller of the distance now and the closest approach
-    to an observed neighbour within this time at constant velocities (0: now only)."""
-    w_collision: float = 5.0
-    w_cohesion: float = 0.1
-    cohesion_distance: float | None = None
-    """m: a UAV whose nearest non-partner UAV is farther than this has left the flock and pays
-    w_cohesion * (sep - cohesion_distance) / position_scale; None: the perception radius."""
-
-    def __post_init__(self) -> None:
-        for f in dataclasses.fields(self):
-            v = getattr(self, f.name)
-            if f.name == "feedforward":
-                if not isinstance(v, (bool, np.bool_)):
-                    raise TypeError(f"feedforward={v!r} is invalid: must be a bool")
-                continue
-            if f.name == "decision_period":
-                object.__setattr__(self, f.name, _check_period(v))
-                continue
-            if f.name == "threat_neighbors":
-                if v is not None:
-                    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
-                        raise ValueError(f"threat_neighbors={v!r} is invalid: an int >= 0 or None")
-                    object.__setattr__(self, f.name, int(v))
-                continue
-            if v is None and f.name in ("accel_scale", "max_accel", "cohesion_distance"):
-                continue
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-                raise TypeError(f"{f.name}={v!r} is invalid: must be a real number")
-            if not np.isfinite(v):
-                raise ValueError(f"{f.name}={v!r} is invalid: must be finite")
-            if f.name.startswith("w_"):
-                if v < 0:
-                    raise ValueError(f"{f.name}={v!r} is invalid: must be >= 0")
-            elif v <= 0:
-                raise ValueError(f"{f.name}={v!r} is invalid: must be > 0")
-            object.__setattr__(self, f.name, float(v))
-
-
 _CLIP = 5.0
 _SYMLOG_DIV = 8.0
 
@@ -342,12 +263,6 @@ class PairFrameInterface(LearningInterface):
 
     def __init__(self, config: PairFlockConfig, **params: Any) -> None:
         super().__init__(config)
-        names = {f.name for f in dataclasses.fields(PairFrameParams)}
-        unknown = sorted(set(params) - names)
-        if unknown:
-            raise ValueError(
-                f"unknown pair-frame parameter(s) {unknown}; valid: {', '.join(sorted(names))}"
-            )
         p = PairFrameParams(**params)
         if p.accel_scale is None:
             p = dataclasses.replace(p, accel_scale=float(config.pair_accel_limit))
@@ -359,8 +274,9 @@ class PairFrameInterface(LearningInterface):
             p = dataclasses.replace(p, threat_neighbors=min(6, config.obs_neighbors))
         elif p.threat_neighbors > config.obs_neighbors:
             raise ValueError(
-                f"threat_neighbors={p.threat_neighbors} is invalid: the env observes only "
-                f"obs_neighbors={config.obs_neighbors} UAVs (raise obs_neighbors)"
+                f"threat_neighbors={p.threat_neighbors} is invalid: must be <= the config's "
+                f"obs_neighbors={config.obs_neighbors}, the UAVs the env observes (raise "
+                "obs_neighbors)"
             )
         self.params = p
         self.decision_period = p.decision_period
@@ -499,7 +415,7 @@ class PairFrameInterface(LearningInterface):
         r = -p.w_error * np.log1p(err / p.error_scale) - p.w_progress * err / p.position_scale
         r -= p.w_band * (err > p.band)
         r -= p.w_effort * np.einsum("...k,...k->...", a, a) / cfg.dim
-        r -= p.w_separation * np.maximum(0.0, p.safe_distance - sep) / p.safe_distance
+        r -= p.w_separation * np.maximum(0.0, p.separation_distance - sep) / p.separation_distance
         r -= p.w_collision * (sep < cfg.collision_distance)
         r -= p.w_cohesion * np.maximum(0.0, sep - p.cohesion_distance) / p.position_scale
         diverged = np.asarray(info["diverged"], dtype=bool)
@@ -511,9 +427,7 @@ class PairFrameInterface(LearningInterface):
 
 
 def _check_period(v: Any) -> int:
-    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1:
-        raise ValueError(f"decision_period={v!r} is invalid: must be an integer >= 1")
-    return int(v)
+    return FRAME_SCHEMA.fields["decision_period"].kind.check("decision_period", v, {})
 
 
 INTERFACES: dict[str, type[LearningInterface]] = {
@@ -524,16 +438,28 @@ INTERFACES: dict[str, type[LearningInterface]] = {
 
 def make_interface(name: str, config: PairFlockConfig, **params: Any) -> LearningInterface:
     """Build the learning interface ``name`` ("world" or "pair") for ``config``."""
-    if not isinstance(name, str) or name not in INTERFACES:
-        raise ValueError(f"frame={name!r} is invalid: must be one of {', '.join(INTERFACES)}")
-    if name == "world" and set(params) - {"decision_period"}:
-        raise ValueError(f"the world frame takes only decision_period, got {sorted(params)}")
+    valid = f"must be one of {', '.join(map(repr, INTERFACES))}"
+    if not isinstance(name, str):
+        raise TypeError(f"frame={name!r} is invalid: {valid}")
+    if name not in INTERFACES:
+        raise ValueError(f"frame={name!r} is invalid: {valid}")
+    extra = sorted(set(params) - {"decision_period"})
+    if name == "world" and extra:
+        raise UnknownFieldError(
+            f"unknown world-frame parameter {extra[0]!r}: the world frame takes only "
+            "decision_period"
+        )
     return INTERFACES[name](config, **params)
 
 
 def interface_from_dict(d: Mapping[str, Any], config: PairFlockConfig) -> LearningInterface:
     """Rebuild an interface stored with :meth:`LearningInterface.to_dict` for ``config``."""
-    if not isinstance(d, Mapping) or "name" not in d:
+    if not isinstance(d, Mapping):
+        raise TypeError(f"interface description {d!r} is invalid: must be a mapping")
+    if "name" not in d:
         raise ValueError(f"interface description {d!r} is invalid: needs a 'name' key")
     params = {k: v for k, v in d.items() if k != "name"}
+    if d["name"] == "pair":
+        # a stored model keeps the parameter names of the release that trained it
+        params = FRAME_SCHEMA.resolve(params, warn=False)
     return make_interface(d["name"], config, **params)

@@ -2,8 +2,8 @@
 
     r_i = - w_err * |e_i|                                   e_i = ||y|| - d_m  (m)
           - w_u   * (||u_i|| / pair_accel_limit)^2           applied pair acceleration
-          - w_sep * max(0, safe - sep_i) / safe              sep_i: nearest non-partner (m)
-          - w_col * [sep_i < collision_distance]
+          - w_sep * max(0, D - sep_i) / D                    sep_i: nearest non-partner (m)
+          - w_col * [sep_i < collision_distance]             D = reward_separation_distance
 
 Both members of a pair share the distance term; effort and separation are individual.
 A swarm whose state diverged gets ``-divergence_penalty`` instead (a finite number).
@@ -29,7 +29,8 @@ def reward_terms(
 ) -> dict[str, np.ndarray]:
     """The weighted penalty terms (each <= 0), shapes (B, M); their sum is the reward."""
     effort = np.einsum("...k,...k->...", u, u) / cfg.pair_accel_limit**2
-    short = np.maximum(0.0, cfg.safe_distance - min_separation) / cfg.safe_distance
+    sep = cfg.reward_separation_distance
+    short = np.maximum(0.0, sep - min_separation) / sep
     return {
         "error": -cfg.reward_error_weight * np.abs(pair_error),
         "effort": -cfg.reward_effort_weight * effort,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import inspect
 
 import pytest
 
@@ -78,9 +79,9 @@ def test_invalid_config_names_field_and_range(overrides, field):
 
 
 def test_unknown_keyword_suggests_the_right_one():
-    with pytest.raises(ValueError, match="Did you mean 'n_uavs'"):
+    with pytest.raises(TypeError, match="Did you mean 'n_uavs'"):
         make_config("paper", n_uav=20)
-    with pytest.raises(ValueError, match="unknown configuration field 'bogus'"):
+    with pytest.raises(TypeError, match="unknown configuration field 'bogus'"):
         parallel_env(bogus=1)
     with pytest.raises(ValueError, match="preset"):
         make_config("nope")
@@ -92,3 +93,271 @@ def test_config_is_frozen_and_serialisable():
         cfg.n_uavs = 3  # type: ignore[misc]
     d = cfg.to_dict()
     assert PairFlockConfig(**{**d, "pairs": [tuple(p) for p in d["pairs"]]}) == cfg
+
+
+# ------------------------------------------------------------------ declarations
+def test_every_field_is_declared_with_type_unit_range_and_meaning():
+    from pairflock_env.config import SCHEMA, field_names
+
+    names = [f.name for f in dataclasses.fields(PairFlockConfig)]
+    assert names == list(field_names()) == list(SCHEMA.fields)
+    in_sections = [f.name for sec in SCHEMA.sections for f in sec.fields]
+    assert sorted(in_sections) == sorted(names)  # each field in exactly one section
+    for f in SCHEMA.fields.values():
+        assert f.doc and f.kind.valid() and f.kind.type_name, f.name
+        assert dataclasses.fields(PairFlockConfig)[names.index(f.name)].metadata["declaration"] is f
+    # the declared defaults are valid: the default config is the paper's
+    assert PairFlockConfig() == make_config(None) == make_config("paper").replace(preset=None)
+    sig = inspect.signature(PairFlockConfig)
+    assert list(sig.parameters) == names
+    assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for p in sig.parameters.values())
+
+
+def test_presets_list_only_what_differs_from_the_defaults():
+    from pairflock_env.config import SCHEMA
+
+    assert PRESETS["paper"] == {}  # the defaults are the paper's values
+    for name, entries in PRESETS.items():
+        cfg = make_config(name)
+        ctx = {n: getattr(cfg, n) for n in SCHEMA.fields}
+        for key in entries:
+            f = SCHEMA.fields[key]
+            default = f.kind.check(key, f.default, ctx)
+            assert getattr(cfg, key) != default, f"preset {name!r} repeats the default {key}"
+
+
+def test_stored_model_configs_load_to_the_same_values(tmp_path):
+    """A config stored in a model zip by the previous release (with safe_distance) loads
+    silently, and the same task built today has exactly the stored values."""
+    import json
+    import warnings
+    import zipfile
+    from pathlib import Path
+
+    models = sorted((Path(__file__).parent.parent / "models").glob("*.zip"))
+    assert models
+    for path in models:
+        meta = json.loads(zipfile.ZipFile(path).read("data"))["pairflock"]
+        stored = meta["config"]
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            cfg = PairFlockConfig.from_dict(stored)
+        renamed = {
+            ("reward_separation_distance" if k == "safe_distance" else k): v
+            for k, v in stored.items()
+        }
+        assert cfg.to_dict() == renamed
+        assert make_config(meta["settings"]["preset"], **meta["settings"]["env"]) == cfg
+
+
+def test_values_are_normalised():
+    import numpy as np
+
+    cfg = make_config(
+        "paper",
+        n_uavs=np.int32(20),
+        dt=np.float32(0.02),
+        pinning=[5, 1, 3],
+        pairs=[[0, 1], [2, 3]],
+        d_m=np.array([4, 5]),
+        leader_position=np.array([1, 2]),
+        terminate_on_collision=np.bool_(True),
+    )
+    assert type(cfg.n_uavs) is int and type(cfg.dt) is float and cfg.dt == float(np.float32(0.02))
+    assert cfg.pinning == (1, 3, 5) and cfg.pairs == ((0, 1), (2, 3))
+    assert cfg.d_m == (4.0, 5.0) and cfg.leader_position == (1.0, 2.0)
+    assert cfg.terminate_on_collision is True
+    assert cfg.vector("leader_velocity").shape == (2,) and cfg.d_m_array.dtype == np.float64
+    assert hash(cfg) == hash(PairFlockConfig(**cfg.to_dict()))
+
+
+def test_sections_group_the_flat_fields():
+    from pairflock_env.config import SCHEMA, ConfigSection
+
+    cfg = make_config("paper-quadrotor")
+    sec = cfg.section("flocking")
+    assert isinstance(sec, ConfigSection) and sec.radius == cfg.radius == sec["radius"]
+    assert dict(sec) == {f.name: getattr(cfg, f.name) for f in SCHEMA.section("flocking").fields}
+    assert cfg.section("quadrotor").quad_mass == cfg.quad_mass
+    every = [name for s in cfg.sections().values() for name in s]
+    assert every == list(SCHEMA.fields)
+    with pytest.raises(KeyError, match="sections: meta, swarm"):
+        cfg.section("nope")
+    with pytest.raises(AttributeError, match="has no field"):
+        _ = sec.quad_mass
+
+
+def test_unknown_keywords_are_type_errors_everywhere():
+    import gymnasium as gym
+
+    from pairflock_env import ENV_ID, PairFlockCore
+    from pairflock_env.config import UnknownFieldError
+    from pairflock_env.learning import PairFrameParams, make_interface
+
+    cfg = make_config("paper", n_uavs=8)
+    calls = [
+        lambda: make_config("paper", n_uav=8),
+        lambda: PairFlockConfig(n_uav=8),
+        lambda: cfg.replace(n_uav=8),
+        lambda: PairFlockConfig.from_dict({**cfg.to_dict(), "n_uav": 8}),
+        lambda: PairFlockCore(n_uav=8),
+        lambda: PairFlockCore(cfg, n_uav=8),
+        lambda: parallel_env(n_uav=8),
+        lambda: gym.make(ENV_ID, n_uav=8),
+    ]
+    for call in calls:
+        with pytest.raises(TypeError, match="Did you mean 'n_uavs'") as e:
+            call()
+        assert isinstance(e.value, UnknownFieldError) and isinstance(e.value, ValueError)
+    # a wrapper's keyword the env does not know (TorchRL's GymEnv passes frameskip)
+    with pytest.raises(TypeError, match="unknown configuration field 'frameskip'"):
+        gym.make(ENV_ID, frameskip=4)
+    with pytest.raises(TypeError, match="Did you mean 'w_error'"):
+        make_interface("pair", cfg, w_eror=1.0)
+    with pytest.raises(TypeError, match="Did you mean 'w_error'"):
+        PairFrameParams(w_eror=1.0)
+    with pytest.raises(TypeError, match="world-frame parameter 'w_error'"):
+        make_interface("world", cfg, w_error=1.0)
+
+
+def test_choosing_the_quadrotor_picks_dim_and_substeps():
+    import gymnasium as gym
+    import numpy as np
+
+    from pairflock_env import ENV_ID
+
+    cfg = make_config("paper", dynamics="quadrotor")
+    assert cfg.dim == 3 and cfg.leader_position == (25.0, 25.0, 25.0)
+    assert cfg.substeps == 3  # the fewest with dt / substeps <= 0.1 / 27 s
+    assert make_config("paper", dynamics="quadrotor", dt=0.02).substeps == 6
+    assert make_config("paper", dynamics="quadrotor", quad_attitude_freq=30.0).substeps == 6
+    # replace() derives them again; values the user set stay
+    assert make_config("paper").replace(dynamics="quadrotor") == cfg
+    assert (
+        cfg.replace(dynamics="particle").dim == 2 and cfg.replace(dynamics="particle").substeps == 1
+    )
+    assert make_config("paper", substeps=4).replace(dynamics="quadrotor").substeps == 4
+    with pytest.raises(ValueError, match=r"^dim=2 is invalid: must be 3"):
+        make_config("paper", dynamics="quadrotor", dim=2)
+    with pytest.raises(ValueError, match=r"^substeps=1 is invalid: .*substeps >= 3"):
+        make_config("paper", dynamics="quadrotor", substeps=1)
+    # the preset's own values are kept (its particle variant flies the same 3-D scenario)
+    assert make_config("paper-quadrotor", dynamics="particle").dim == 3
+    env = gym.make(ENV_ID, dynamics="quadrotor", n_uavs=6)
+    obs, _ = env.reset(seed=0)
+    obs, reward, *_ = env.step(env.action_space.sample())
+    assert np.isfinite(obs).all() and np.isfinite(reward)
+    env.close()
+    penv = parallel_env(dynamics="quadrotor", n_uavs=6)
+    assert penv.config.dim == 3
+    penv.close()
+
+
+def test_rule_errors_name_the_field_the_user_set():
+    cases = [
+        (dict(quad_mass=10), "quad_mass=10.0 is invalid: the hover thrust"),
+        (dict(quad_motor_thrust_max=1.0), "quad_motor_thrust_max=1.0 is invalid: the hover"),
+        (dict(quad_gravity=50.0), "quad_gravity=50.0 is invalid: the hover thrust"),
+        (dict(quad_attitude_freq=200.0), "quad_attitude_freq=200.0 is invalid: the physics step"),
+        (dict(substeps=2), "substeps=2 is invalid: the physics step"),
+        (dict(dt=0.05), "dt=0.05 is invalid: the physics step"),
+        (dict(quad_tilt_limit=80.0, quad_crash_tilt=60.0), "quad_crash_tilt=60.0 is invalid"),
+    ]
+    for overrides, start in cases:
+        with pytest.raises(ValueError) as e:
+            make_config("paper-quadrotor", **overrides)
+        msg = str(e.value)
+        assert msg.startswith(start), msg
+        assert "[with " in msg  # and the values of the other fields of the rule
+    # a rule none of whose fields the user set names its first field
+    with pytest.raises(ValueError, match=r"^radius=6.0 is invalid: must exceed spacing"):
+        make_config("paper", radius=6.0)
+    with pytest.raises(ValueError, match=r"^spacing=9.0 is invalid: .*\[with radius=8.4\]"):
+        make_config("paper", spacing=9.0)
+
+
+def test_placement_that_cannot_succeed_is_refused_at_construction():
+    for preset, overrides, field in [
+        ("paper", dict(min_init_spacing=200.0), "min_init_spacing"),
+        ("paper", dict(swarm_half_width=2.0), "swarm_half_width"),
+        ("paper-quadrotor", dict(n_uavs=300), "n_uavs"),
+        ("paper", dict(init="random", pairs=((0, 1), (2, 3)), pair_corner=1.0), "pair_corner"),
+        ("paper", dict(divergence_limit=80.0), "divergence_limit"),
+    ]:
+        with pytest.raises(ValueError, match=f"^{field}=.* is invalid: .*must") as e:
+            make_config(preset, **overrides)
+        assert "[with " in str(e.value)
+    # as dense as allowed still places (2-D: 0.3, 3-D: 0.15 of the start box)
+    from pairflock_env import PairFlockCore
+    from pairflock_env.config.sections.pairs import start_density
+
+    cfg = make_config("paper", n_uavs=60, swarm_half_width=18.0, min_init_spacing=3.0)
+    assert 0.2 < start_density(cfg) <= 0.3
+    core = PairFlockCore(cfg, num_envs=4)
+    core.reset(seed=[0, 1, 2, 3])
+
+
+def test_obs_size_formula_matches_the_layout():
+    from pairflock_env.config.sections.sensing import obs_size
+    from pairflock_env.observations import ObsLayout
+
+    for dim in (2, 3):
+        for k in (0, 1, 6, 1000):
+            assert obs_size(dim, k) == ObsLayout(dim, k).size
+
+
+# ------------------------------------------------------------------ the rename
+def test_safe_distance_is_a_deprecated_alias():
+    import pickle
+    import warnings
+
+    from pairflock_env.learning import PairFrameParams, interface_from_dict, make_interface
+
+    with pytest.warns(DeprecationWarning, match="safe_distance.*reward_separation_distance"):
+        cfg = make_config("paper", safe_distance=1.5)
+    assert cfg.reward_separation_distance == 1.5 and "safe_distance" not in cfg.to_dict()
+    with pytest.warns(DeprecationWarning):
+        assert cfg.replace(safe_distance=2.0).reward_separation_distance == 2.0
+    with pytest.warns(DeprecationWarning):
+        assert PairFlockConfig(safe_distance=2.0).reward_separation_distance == 2.0
+    with pytest.warns(DeprecationWarning, match="reward_separation_distance"):
+        assert cfg.safe_distance == 1.5
+    with pytest.raises(TypeError, match="give only reward_separation_distance"):
+        make_config("paper", safe_distance=1.0, reward_separation_distance=1.0)
+    # a pickle made before the rename holds the old name
+    old = pickle.loads(pickle.dumps(cfg))
+    state = dict(vars(cfg))
+    state["safe_distance"] = state.pop("reward_separation_distance")
+    old.__setstate__(state)
+    assert old == cfg
+
+    with pytest.warns(DeprecationWarning, match="'safe_distance'.*'separation_distance'"):
+        itf = make_interface("pair", cfg, safe_distance=3.0)
+    assert itf.params.separation_distance == 3.0 and "safe_distance" not in itf.to_dict()
+    with pytest.warns(DeprecationWarning):
+        assert PairFrameParams(safe_distance=3.0).separation_distance == 3.0
+    stored = {**itf.to_dict()}
+    stored["safe_distance"] = stored.pop("separation_distance")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # stored model metadata loads silently
+        again = interface_from_dict(stored, cfg)
+        assert PairFlockConfig.from_dict({**cfg.to_dict()}) == cfg
+    assert again.params == itf.params
+
+
+def test_docs_config_md_is_current():
+    from pathlib import Path
+
+    from pairflock_env.config.docs import render
+
+    path = Path(__file__).parent.parent / "docs" / "config.md"
+    assert path.read_text(encoding="utf-8") == render(), (
+        "docs/config.md is stale: run `python -m pairflock_env.config.docs docs/config.md`"
+    )
+    text = render()
+    from pairflock_env.config import LIMITS, SCHEMA
+
+    for name in SCHEMA.fields:
+        assert f"| `{name}` |" in text
+    for lim in LIMITS:
+        assert f"`{lim.name}`" in text

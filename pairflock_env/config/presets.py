@@ -1,0 +1,81 @@
+"""Named presets and :func:`make_config`.
+
+The defaults of every field ARE the paper's values (Sec. VI-A with the parameter set of
+docs/paper-notes.md), so ``"paper"`` lists nothing: one source of truth, and
+``PairFlockConfig()`` is the paper's experiment. Every other preset lists only what differs
+from the defaults (a test checks that no preset repeats a default).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .fields import invalid
+from .model import SCHEMA, PairFlockConfig
+
+__all__ = ["PRESETS", "make_config", "preset_names"]
+
+PRESETS: dict[str, dict[str, Any]] = {
+    # Sec. VI-A: the defaults.
+    "paper": {},
+    # Sec. VI-B at quadrotor scale, with the parameter set of docs/paper-notes.md ("Quadrotor
+    # experiment"): 10 quadrotors, one pair, a leader that climbs, levels off and turns twice.
+    "paper-quadrotor": dict(
+        n_uavs=10,
+        dynamics="quadrotor",
+        dim=3,  # the scenario is 3-D whichever vehicle flies it (dynamics="particle" too)
+        dt=0.02,  # protocol and pair action at 50 Hz ...
+        substeps=10,  # ... physics and attitude loop at 500 Hz
+        horizon=65.0,
+        spacing=3.0,
+        radius=3.6,
+        attraction=0.3,
+        repulsion=3.0,
+        pin_position_gain=0.5,
+        pin_velocity_gain=1.414,
+        leader="climb_and_turn",
+        leader_position=(0.0, 0.0, 20.0),
+        leader_velocity=(5.0, 0.0, 1.0),  # 5 m/s along +x, climbing at 1 m/s ...
+        leader_climb_time=20.0,  # ... until 20 s,
+        leader_level_time=2.0,  # levelling off during the first turn
+        leader_turns=((20.0, 2.0, 90.0), (50.0, 2.0, 90.0)),
+        d_m=2.5,
+        surface_slope=1.0,
+        pair_accel_limit=20.0,
+        swarm_center=(0.0, 0.0, 20.0),
+        swarm_half_width=(6.0, 6.0, 1.5),
+        pair_corner=(10.0, 10.0, 0.0),  # pair at (-10, -10, 20) and (10, 10, 20)
+        quad_ground_altitude=0.0,
+    ),
+}
+
+
+def preset_names() -> tuple[str, ...]:
+    """Names of the presets, for ``make_config`` and the ``--preset`` options."""
+    return tuple(PRESETS)
+
+
+def make_config(preset: str | None = "paper", **overrides: Any) -> PairFlockConfig:
+    """Build a validated config from a preset name plus single-field overrides.
+
+    ``preset=None`` starts from the defaults (which are the paper's values) with
+    ``preset=None`` recorded. Unknown presets raise ``ValueError`` with the valid choices,
+    unknown fields a ``TypeError`` with a did-you-mean hint; a field the preset sets keeps the
+    preset's value unless overridden, the others follow the defaults (``dim`` and
+    ``substeps`` follow ``dynamics``).
+    """
+    if preset is None:
+        base: dict[str, Any] = {}
+    elif not isinstance(preset, str):
+        raise invalid("preset", preset, "must be None or one of " + _choices(), TypeError)
+    elif preset not in PRESETS:
+        raise invalid("preset", preset, "must be one of " + _choices())
+    else:
+        base = dict(PRESETS[preset])
+    changed = SCHEMA.resolve(overrides, warn=True)
+    values = {**base, "preset": preset, **changed}
+    return PairFlockConfig._create(values, tuple(changed))
+
+
+def _choices() -> str:
+    return ", ".join(map(repr, PRESETS))
