@@ -94,6 +94,12 @@ import numpy as np
 from .config import PairFlockConfig
 from .observations import ObsLayout
 from .rewards import DIVERGENCE_PENALTY
+from .spaces import (
+    core_reward_range,
+    pair_error_bound,
+    physical_observation_bounds,
+    separation_bound,
+)
 
 __all__ = [
     "INTERFACES",
@@ -176,6 +182,17 @@ class LearningInterface:
     #: every entry of an encoded observation lies in [-observation_bound, observation_bound]
     observation_bound: float = np.inf
 
+    def observation_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(low, high), each float32 (observation_size,): the box every encoded observation
+        lies in (what the views' observation spaces are)."""
+        b = np.full(self.observation_size, self.observation_bound, np.float32)
+        return -b, b
+
+    @property
+    def reward_range(self) -> tuple[float, float]:  # pragma: no cover - abstract
+        """(low, high): every per-agent reward of :meth:`reward` lies in this range."""
+        raise NotImplementedError
+
     @property
     def observation_size(self) -> int:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -230,13 +247,33 @@ class WorldInterface(LearningInterface):
     def __init__(self, config: PairFlockConfig, decision_period: int = 1) -> None:
         super().__init__(config)
         self.decision_period = _check_period(decision_period)
+        self._bounds: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def observation_size(self) -> int:
         return self.layout.size
 
+    def _box(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._bounds is None:
+            self._bounds = physical_observation_bounds(self.config)
+        return self._bounds
+
+    def observation_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The physical observation's box, derived from the config
+        (:func:`~pairflock_env.spaces.physical_observation_bounds`)."""
+        low, high = self._box()
+        return low.copy(), high.copy()
+
+    @property
+    def reward_range(self) -> tuple[float, float]:
+        """The core's reward range (:func:`~pairflock_env.spaces.core_reward_range`)."""
+        return core_reward_range(self.config)
+
     def encode(self, obs: np.ndarray) -> np.ndarray:
-        return self._check_obs(obs).astype(np.float32)
+        """The physical observation as float32, inside :meth:`observation_bounds` (only
+        observation noise beyond ``NOISE_SIGMAS`` standard deviations is ever clipped)."""
+        low, high = self._box()
+        return np.clip(self._check_obs(obs).astype(np.float32), low, high)
 
     def decode(self, obs: np.ndarray, action: np.ndarray) -> np.ndarray:
         obs = self._check_obs(obs)
@@ -501,10 +538,31 @@ class PairFrameInterface(LearningInterface):
         r -= p.w_effort * np.einsum("...k,...k->...", a, a) / cfg.dim
         r -= p.w_separation * np.maximum(0.0, p.safe_distance - sep) / p.safe_distance
         r -= p.w_collision * (sep < cfg.collision_distance)
-        r -= p.w_cohesion * np.maximum(0.0, sep - p.cohesion_distance) / p.position_scale
+        # a UAV with no other UAV at all (n_uavs = 2) has no flock to leave
+        far = np.where(np.isfinite(sep), np.maximum(0.0, sep - p.cohesion_distance), 0.0)
+        r -= p.w_cohesion * far / p.position_scale
         diverged = np.asarray(info["diverged"], dtype=bool)
         r[diverged] = -DIVERGENCE_PENALTY
         return r
+
+    @property
+    def reward_range(self) -> tuple[float, float]:
+        """(low, 0): the worst case of every term at once, with the largest pair error and
+        separation a non-diverged state allows (:func:`~pairflock_env.spaces.pair_error_bound`),
+        or ``-DIVERGENCE_PENALTY``. Typical rewards are of order one per control step (see
+        ``docs/clients.md``), far inside this guaranteed range."""
+        p = self.params
+        e, s = pair_error_bound(self.config), separation_bound(self.config)
+        worst = (
+            p.w_error * np.log1p(e / p.error_scale)
+            + p.w_progress * e / p.position_scale
+            + p.w_band
+            + p.w_effort
+            + p.w_separation
+            + p.w_collision
+            + p.w_cohesion * max(0.0, s - p.cohesion_distance) / p.position_scale
+        )
+        return -max(float(worst) * (1 + 1e-6), DIVERGENCE_PENALTY), 0.0
 
     def to_dict(self) -> dict[str, Any]:
         return {"name": self.name, **dataclasses.asdict(self.params)}
