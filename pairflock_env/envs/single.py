@@ -99,7 +99,7 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
     >>> obs.shape, env.action_space.shape
     ((104,), (4,))
     >>> obs, r, terminated, truncated, info = env.step(env.action_space.sample())
-    >>> round(info["sim_time"], 2)  # one decision of the pair interface: 5 control steps
+    >>> round(info["sim_time"], 2)
     0.05
 
     ## Version history
