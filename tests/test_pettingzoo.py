@@ -212,7 +212,7 @@ def test_observations_and_states_lie_in_their_bounded_spaces(extra, small_kwargs
                 assert env.observation_space(a).contains(obs[a]), a
             assert env.state_space.contains(env.state())
             act = {a: rng.choice([-3.0, 3.0], env.config.dim) for a in env.agents}
-            obs, rew, term, _, infos = env.step(act)
+            obs, rew, term, _, _ = env.step(act)
             assert all(env.reward_range[0] <= r <= 0 for r in rew.values())
             ended += any(term.values())
         for a in obs:
