@@ -9,7 +9,7 @@ pytest.importorskip("stable_baselines3")
 
 import gymnasium as gym
 from stable_baselines3 import PPO
-from stable_baselines3.common.vec_env import DummyVecEnv, VecCheckNan, VecMonitor
+from stable_baselines3.common.vec_env import DummyVecEnv, VecCheckNan, VecEnv, VecMonitor
 
 from baselines import make_pair_policy
 from baselines.rollout import rollout, trace_metrics
@@ -199,11 +199,18 @@ def test_per_swarm_options_are_all_validated_before_any_swarm_resets():
         (np.zeros((11, 2)), ValueError),
         ([["a", "b"]] * 12, TypeError),
     ]:
-        env.set_options([{"positions": q}] * 2 + [{"positions": bad}] * 2)
+        opts = [{"positions": q}] * 2 + [{"positions": bad}] * 2
+        before = snapshot(env)
+        with pytest.raises(exc, match="row 2"):
+            env.set_options(opts)  # checked where it is received
+        assert snapshot(env) == before
+        VecEnv.set_options(env, opts)  # stored unchecked, as SB3's own set_options does
         before = snapshot(env)
         with pytest.raises(exc, match="swarm 1"):
             env.reset()
         assert snapshot(env) == before
+    with pytest.raises(ValueError, match="entries"):
+        env.set_options([{}] * 3)
     env.set_options([{"positions": q}] * 2 + [{"velocities": np.ones((12, 2))}] * 2)
     env.reset()
     np.testing.assert_array_equal(env.core.q[0], q)

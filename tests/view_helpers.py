@@ -51,6 +51,8 @@ def zero_action(env, kind: str):
         return {a: np.zeros(env.config.dim) for a in env.agents}
     if kind == "aec":
         return np.zeros(env.unwrapped.config.dim)
+    if kind == "sb3":
+        return np.zeros((env.num_envs, env.config.dim))
     return np.zeros(env.action_space.shape)
 
 

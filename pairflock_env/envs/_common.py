@@ -105,8 +105,13 @@ def build_core_and_interface(
 
 
 def check_policy_actions(actions: Any, shape: tuple[int, ...], name: str = "actions") -> np.ndarray:
-    """Policy actions as float64 of exactly ``shape``; TypeError/ValueError otherwise."""
-    return real_array(actions, name, shape)
+    """Policy actions as float64 of exactly ``shape``; TypeError/ValueError naming ``name``
+    otherwise (also for values that are finite but beyond float64's range)."""
+    out = real_array(actions, name, shape)
+    if not np.isfinite(out).all():  # e.g. np.longdouble("1e400"): finite, but inf as float64
+        bad = np.argwhere(~np.isfinite(out))[0].tolist()
+        raise ValueError(f"{name} is beyond float64's range (first at index {bad})")
+    return out
 
 
 def check_reset_options(options: Any, n_uavs: int, dim: int, name: str = "options") -> None:

@@ -273,6 +273,17 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
         self._seeds = [per_swarm[i // M] for i in range(self.num_envs)]
         return list(self._seeds)
 
+    def set_options(self, options: dict | list[dict | None] | None = None) -> None:
+        """Options for the next ``reset()``: one dict for every row or a list of ``num_envs``
+        (SB3's convention); checked now (TypeError/ValueError naming the row)."""
+        rows = options if isinstance(options, list) else [options] * self.num_envs
+        if len(rows) != self.num_envs:
+            raise ValueError(f"options has {len(rows)} entries, expected {self.num_envs} (rows)")
+        N, D = self.config.n_uavs, self.config.dim
+        for i, o in enumerate(rows):
+            check_reset_options(o, N, D, f"options of row {i}")
+        super().set_options(options)
+
     def _per_swarm(self, values: list[Any], what: str) -> list[Any]:
         M = self.agents_per_swarm
         out = []
