@@ -3,10 +3,10 @@
 The env's observation is physical (SI units, world frame; see :mod:`.observations`) and its
 action is a world-frame pair acceleration in units of ``pair_accel_limit``: that is what the
 analytic controllers read and write. A neural network learns faster and generalises better in
-a frame that matches the task, so the learning views (Gymnasium, SB3) and the ``sb3:`` policy
-loader put an *interface* between the env and the network. There are two, both pure
-functions of the env's own observation and action (one implementation, shared by every view
-and by the loader, so training and evaluation cannot drift apart):
+a frame that matches the task, so the views (``interface=`` on PettingZoo, Gymnasium and SB3)
+and the ``sb3:`` policy loader put an *interface* between the env and the network. There are
+two, both pure functions of the env's own observation and action (one implementation, shared
+by every view and by the loader, so training and evaluation cannot drift apart):
 
 ``"world"``
     the identity: raw observation, raw action, the core's reward (``pairflock_env.rewards``).
@@ -76,8 +76,11 @@ and by the loader, so training and evaluation cannot drift apart):
     decisions, not 350) and cuts the network's cost per simulated second, which is what lets
     PPO learn the task in minutes; the flocking protocol, the physics and the feed-forward
     still run at the paper's 100 Hz. The ``sb3:`` loader holds the action the same way
-    (through SB3's ``predict`` state).
+    (through SB3's ``predict`` state); both use :class:`pairflock_env.decision.DecisionHold`.
 
+Each interface declares the box of its observations (:meth:`LearningInterface.observation_bounds`:
+the physical bounds of :mod:`pairflock_env.spaces` for ``"world"``, [-5, 5] for ``"pair"``)
+and the range of its reward (``reward_range``), both derived from the config.
 ``make_interface(name, config, **params)`` builds one; ``interface.to_dict()`` /
 ``interface_from_dict(d, config)`` store it with a trained model so that the loader rebuilds
 the same transform for any env it is evaluated on.

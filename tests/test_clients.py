@@ -57,7 +57,7 @@ def test_torchrl_example():
     strict=False,
     reason="GymEnv passes frameskip= and retries without it only on a TypeError whose message "
     "has Python's wording \"unexpected keyword argument 'frameskip'\": the config's unknown-"
-    "keyword error (issue 10 item 2, made on another branch)",
+    "keyword error, changed on the config branch",
 )
 def test_torchrl_gymenv_example():
     pytest.importorskip("torchrl")

@@ -46,8 +46,8 @@ ACTION_SHAPES = {"parallel": (DIM,), "aec": (DIM,), "gym": (2 * DIM,), "vector":
 ACTION_SHAPES["sb3"] = (4, DIM)
 
 #: masked arrays with masked entries: the core's action check (``real_array``) raises
-#: IndexError on them; the fix belongs to the core (issue 10 item 14, another branch). Set to
-#: True once it is merged (test_masked_entries_are_a_clear_error then passes, too).
+#: IndexError on them; the fix belongs to the core and is made on the core branch. Set to True
+#: once it is merged (test_masked_entries_are_a_clear_error then passes, too).
 MASKED_ENTRIES = False
 
 _ENVS: dict[str, Any] = {}
@@ -272,7 +272,7 @@ def test_any_reset_is_rejected_cleanly_or_starts_finitely(kind):
 @pytest.mark.xfail(
     not MASKED_ENTRIES,
     strict=False,
-    reason="real_array raises IndexError on masked entries (core fix, issue 10 item 14)",
+    reason="real_array raises IndexError on masked entries (fixed on the core branch)",
 )
 @pytest.mark.parametrize("kind", VIEWS)
 def test_masked_entries_are_a_clear_error(kind):

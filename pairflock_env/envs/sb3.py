@@ -265,7 +265,8 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
     # ------------------------------------------------------------------ seeding/reset
     def seed(self, seed: Any = None) -> Sequence[Any]:
         """Seeds for the next ``reset()``: swarm b gets ``seed + b`` (a SeedSequence: its
-        child b); ``None`` draws a fresh int seed from OS entropy. Returns one seed per row."""
+        child b; a list: one seed per swarm); ``None`` draws a fresh int seed from OS entropy.
+        Returns one seed per row."""
         if seed is None:
             seed = int(np.random.SeedSequence().generate_state(1)[0])
         per_swarm = offset_seeds(seed, self.num_swarms)
