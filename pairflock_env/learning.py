@@ -223,14 +223,17 @@ class LearningInterface:
     def to_dict(self) -> dict[str, Any]:
         return {"name": self.name, "decision_period": self.decision_period}
 
-    def _check_obs(self, obs: np.ndarray) -> np.ndarray:
+    def _check_obs_shape(self, obs: np.ndarray) -> np.ndarray:
         obs = np.asarray(obs)
         if obs.shape[-1:] != (self.layout.size,):
             raise ValueError(
                 f"observation has shape {obs.shape}; expected (..., {self.layout.size}) "
                 f"(dim={self.config.dim}, obs_neighbors={self.config.obs_neighbors})"
             )
-        return obs.astype(np.float64, copy=False)
+        return obs
+
+    def _check_obs(self, obs: np.ndarray) -> np.ndarray:
+        return self._check_obs_shape(obs).astype(np.float64, copy=False)
 
     def _check_action(self, action: np.ndarray, lead: tuple[int, ...]) -> np.ndarray:
         a = np.asarray(action, dtype=np.float64)
@@ -275,12 +278,12 @@ class WorldInterface(LearningInterface):
     def encode(self, obs: np.ndarray) -> np.ndarray:
         """The physical observation as float32, inside :meth:`observation_bounds` (only
         observation noise beyond ``NOISE_SIGMAS`` standard deviations is ever clipped)."""
+        obs = self._check_obs_shape(obs)
         low, high = self._box()
-        return np.clip(self._check_obs(obs).astype(np.float32), low, high)
+        return np.clip(obs.astype(np.float32, copy=False), low, high)
 
     def decode(self, obs: np.ndarray, action: np.ndarray) -> np.ndarray:
-        obs = self._check_obs(obs)
-        return self._check_action(action, obs.shape[:-1])
+        return self._check_action(action, self._check_obs_shape(obs).shape[:-1])
 
     def reward(self, reward, info, action, obs=None):
         return np.asarray(reward, dtype=np.float64)

@@ -160,8 +160,10 @@ def held_step(
 
     Each control step decodes the held policy action against the fresh physical observation
     (:class:`~pairflock_env.decision.DecisionHold`) and steps the core. A swarm whose episode
-    ends part-way keeps its results from that step; it goes on integrating with no pair term
-    until the view resets it (the core steps all swarms together).
+    ends part-way keeps its results from that step; while other swarms go on, it integrates
+    with no pair term until the view resets it (the core steps all swarms together). The
+    decision stops early once every swarm has ended, so a single swarm's state stays at the
+    step its episode ended.
     """
     B, M = actions.shape[:2]
     k = interface.decision_period
@@ -195,6 +197,8 @@ def held_step(
         terminated[now] = res.terminated[now]
         truncated[now] = res.truncated[now]
         ended |= now
+        if ended.all():
+            break
         obs = res.obs
     return HeldStep(out_obs, total / count[:, None], terminated, truncated, out_info)
 

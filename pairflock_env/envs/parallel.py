@@ -195,7 +195,6 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         self.state_space = spaces.Box(*state_bounds(cfg), dtype=np.float32)
         self.physical_obs: np.ndarray | None = None
         self._frames = SwarmFrames(self.core, render_mode)
-        self._state: np.ndarray | None = None
         self._title: str | None = None
 
     # PettingZoo requires the same object on every call
@@ -232,8 +231,7 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         res = self.core.reset(seed=None if seed is None else [seed], options=options)
         self.agents = list(self.possible_agents)
         self._frames.reset()
-        self._state = None
-        return self._emit(res.obs, res.info), self._infos(res.info)
+        return self._emit(res.obs), self._infos(res.info)
 
     def check_action(self, agent: Any, action: Any) -> np.ndarray:
         """``action`` of the live agent ``agent`` as float64 (dim,); ValueError/TypeError
@@ -271,7 +269,7 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         a = self._check_action_dict(actions)
         res = held_step(self.core, self.interface, self.physical_obs[None], a)
         agents = self.possible_agents
-        obs = self._emit(res.obs, res.info)
+        obs = self._emit(res.obs)
         rewards = dict(zip(agents, res.reward[0].tolist(), strict=True))
         term = bool(res.terminated[0])
         trunc = bool(res.truncated[0])
@@ -284,16 +282,10 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
             self.render()
         return obs, rewards, terminations, truncations, infos
 
-    def _emit(self, phys: np.ndarray, info: Mapping[str, np.ndarray]):
-        """Observations of swarm 0 by agent; keeps the physical observation and the state."""
+    def _emit(self, phys: np.ndarray):
+        """Observations of swarm 0 by agent; keeps the physical observation."""
         self.physical_obs = phys[0]
         enc = self.interface.encode(phys[0])
-        if not info["diverged"][0] or self._state is None:  # a diverged swarm keeps its state
-            lq, lp = self.core.leader_state()
-            c = self.core
-            s = global_state(self.config, c.q[0], c.p[0], lq[0], lp[0], c.t[0])
-            low, high = self.state_space.low, self.state_space.high
-            self._state = np.clip(np.nan_to_num(s), low, high)
         return {a: enc[m] for m, a in enumerate(self.possible_agents)}
 
     def _infos(self, info: dict[str, np.ndarray]) -> dict[str, dict[str, Any]]:
@@ -314,11 +306,14 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         return out
 
     def state(self) -> np.ndarray:
-        """The global state (``state_layout``), float32 in ``state_space``; a diverged swarm
-        keeps its last finite state."""
-        if self._state is None:
+        """The global state now (``state_layout``), float32 in ``state_space`` (the state of a
+        diverged swarm, whose episode has ended, is clipped into it)."""
+        if self.physical_obs is None:
             raise RuntimeError("call reset() before state()")
-        return self._state.copy()
+        c = self.core
+        lq, lp = c.leader_state()
+        s = global_state(self.config, c.q[0], c.p[0], lq[0], lp[0], c.t[0])
+        return np.clip(np.nan_to_num(s), self.state_space.low, self.state_space.high)
 
     def render(self):
         """The swarm as an RGB array (``render_mode="rgb_array"``) or in a window."""
