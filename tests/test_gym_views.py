@@ -280,3 +280,13 @@ def test_learning_views_fly_the_quadrotor():
         obs, r, _term, _trunc, info = envs.step(envs.action_space.sample())
         assert np.isfinite(obs).all() and np.isfinite(r).all()
     assert not info["crashed"].any()
+
+
+def test_pair_reward_is_finite_without_any_other_uav():
+    """n_uavs=2: no non-partner UAV, so min_separation is inf; the cohesion term must not turn
+    that into an infinite reward (it gave -inf before)."""
+    env = gym.make(ENV_ID, n_uavs=2, max_cycles=20).unwrapped
+    env.reset(seed=0)
+    _, r, *_ = env.step(np.zeros(4))
+    low, high = env.reward_range
+    assert np.isfinite(r) and low <= r <= high

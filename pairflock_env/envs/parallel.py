@@ -74,7 +74,8 @@ dim = 2 and ``obs_neighbors`` = 6; read fields by name with
 
 ## State (centralised critics)
 ``env.state()`` is the swarm's global state, float32, in ``env.state_space`` (bounded like
-the observation); ``env.state_layout`` names its fields:
+the observation; a diverged swarm's state, at the end of its episode, is clipped into it);
+``env.state_layout`` names its fields (shown for 3 UAVs in 2-D):
 
 {state_table}
 
