@@ -301,6 +301,32 @@ def test_seed_types_are_treated_alike_in_every_view(kind):
         assert snapshot(env) == before
 
 
+def test_one_seed_rule_keeps_numpys_spawn_semantics():
+    """seeding.swarm_generators gives what SeedSequence(seed).spawn(n) gave (bit-identical
+    results), without advancing a SeedSequence passed in."""
+    import copy
+
+    from pairflock_env.seeding import check_seed, offset_seeds, swarm_generators
+
+    for seed in (0, 5, np.int64(7), 2**70, np.random.SeedSequence(3)):
+        ref_ss = copy.deepcopy(seed) if isinstance(seed, np.random.SeedSequence) else None
+        ref = (ref_ss or np.random.SeedSequence(int(seed))).spawn(3)
+        ours = swarm_generators(seed, 3)
+        for g, c in zip(ours, ref, strict=True):
+            assert g.random() == np.random.default_rng(c).random()
+    ss = np.random.SeedSequence(9)
+    swarm_generators(ss, 2)
+    assert ss.n_children_spawned == 0
+    assert [g is None for g in swarm_generators([1, None], 2)] == [False, True]
+    assert offset_seeds(4, 3) == [4, 5, 6] and offset_seeds(None, 3) is None
+    assert [c.spawn_key for c in offset_seeds(ss, 2)] == [(0,), (1,)]
+    for bad, exc in [("1", TypeError), (True, TypeError), (2.0, TypeError), (-1, ValueError)]:
+        with pytest.raises(exc, match="seed"):
+            check_seed(bad)
+    with pytest.raises(ValueError, match="3 entries, expected 2"):
+        swarm_generators([1, 2, 3], 2)
+
+
 def test_the_same_seed_sequence_gives_the_same_episode_twice():
     env = make_view("parallel")
     ss = np.random.SeedSequence(7)
