@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from pairflock_env.decision import DecisionHold
+
 from .policies import check_observation, resolve_env
 
 __all__ = ["ALGORITHMS", "METADATA_KEY", "SB3PairPolicy", "load_sb3_policy", "read_metadata"]
@@ -100,9 +102,10 @@ class SB3PairPolicy:
         obs = check_observation(observation, self.layout.size)
         batch = obs.reshape(-1, self.layout.size)
         n = batch.shape[0]
-        k = self.interface.decision_period
-        held = age = None
-        if state is not None:
+        starts = None
+        if state is None:
+            hold = DecisionHold.empty(self.interface, n)
+        else:
             ok = isinstance(state, tuple) and len(state) == 2
             if not ok or np.shape(state[0]) != (n, self.config.dim):
                 raise ValueError(
@@ -110,24 +113,20 @@ class SB3PairPolicy:
                     f"of the same size ({n} rows), or None"
                 )
             held, age = np.array(state[0], dtype=np.float64), np.array(state[1], dtype=np.int64)
-        decide = np.ones(n, bool) if held is None else (age % k == 0)
-        if episode_start is not None and held is not None:
-            starts = np.asarray(episode_start, dtype=bool).reshape(-1)
-            if starts.shape != (n,):
-                raise ValueError(
-                    f"episode_start has shape {np.shape(episode_start)}; expected ({n},)"
-                )
-            decide |= starts
-            age[starts] = 0
-        if held is None:
-            held, age = np.zeros((n, self.config.dim)), np.zeros(n, np.int64)
+            hold = DecisionHold(self.interface, held, age)
+            if episode_start is not None:
+                starts = np.asarray(episode_start, dtype=bool).reshape(-1)
+                if starts.shape != (n,):
+                    raise ValueError(
+                        f"episode_start has shape {np.shape(episode_start)}; expected ({n},)"
+                    )
+        decide = hold.due(starts)
         if decide.any():
             enc = self.interface.encode(batch[decide])
             a, _ = self.model.predict(enc, deterministic=deterministic)
-            held[decide] = np.asarray(a, dtype=np.float64).reshape(-1, self.config.dim)
-            age[decide] = 0
-        env_a = self.interface.decode(batch, held)
-        new_state = (held, age + 1)
+            hold.decide(decide, np.asarray(a, dtype=np.float64).reshape(-1, self.config.dim))
+        env_a = hold.env_action(batch)
+        new_state = (hold.held, hold.age)
         return env_a.reshape((*obs.shape[:-1], self.config.dim)).astype(np.float32), new_state
 
     def __repr__(self) -> str:

@@ -6,22 +6,26 @@
 The batched engine is :class:`PairFlockCore`; the PettingZoo views are ``parallel_env``
 (ParallelEnv), ``env`` / ``raw_env`` (AEC). Importing the package registers the Gymnasium env
 ``"pairflock/PairFlock-v0"`` (``gymnasium.make``; ``gymnasium.make_vec`` runs B swarms in one
-core through its ``vector_entry_point``); the SB3 VecEnv is
-``pairflock_env.envs.PairFlockVecEnv`` (imported on first use).
+core through its ``vector_entry_point``, :class:`PairFlockGymVectorEnv`, one row per swarm);
+the SB3 VecEnv with one row per paired UAV is ``pairflock_env.envs.PairFlockSB3VecEnv``
+(imported on first use). Seeds: :mod:`pairflock_env.seeding`; observation and state bounds:
+:mod:`pairflock_env.spaces`.
 """
 
 from .config import PRESETS, PairFlockConfig, make_config, preset_names
 from .core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore, StepResult
 from .envs import (
     ENV_ID,
+    PairFlockAECEnv,
     PairFlockGymEnv,
+    PairFlockGymVectorEnv,
     PairFlockParallelEnv,
-    PairFlockVectorEnv,
     agent_name,
     env,
     parallel_env,
     raw_env,
 )
+from .envs._common import deprecated_attr
 from .observations import ObsField, ObsLayout
 
 # The one place the version is written: pyproject.toml reads it from here at build time.
@@ -35,11 +39,18 @@ def _register_gymnasium() -> None:
         gymnasium.register(
             id=ENV_ID,
             entry_point="pairflock_env.envs.single:PairFlockGymEnv",
-            vector_entry_point="pairflock_env.envs.vector:PairFlockVectorEnv",
+            vector_entry_point="pairflock_env.envs.vector:PairFlockGymVectorEnv",
         )
 
 
 _register_gymnasium()
+
+_DEPRECATED = {"PairFlockVectorEnv": "PairFlockGymVectorEnv"}
+
+
+def __getattr__(name: str):
+    return deprecated_attr(__name__, name, _DEPRECATED, globals())
+
 
 __all__ = [
     "AGENT_INFO_KEYS",
@@ -48,11 +59,12 @@ __all__ = [
     "SWARM_INFO_KEYS",
     "ObsField",
     "ObsLayout",
+    "PairFlockAECEnv",
     "PairFlockConfig",
     "PairFlockCore",
     "PairFlockGymEnv",
+    "PairFlockGymVectorEnv",
     "PairFlockParallelEnv",
-    "PairFlockVectorEnv",
     "StepResult",
     "__version__",
     "agent_name",

@@ -31,6 +31,7 @@ from .leader import make_leader
 from .observations import ObsLayout
 from .pairing import sliding_surface
 from .rewards import DIVERGENCE_PENALTY, reward_terms
+from .seeding import swarm_generators
 
 __all__ = ["AGENT_INFO_KEYS", "SWARM_INFO_KEYS", "PairFlockCore", "SeedLike", "StepResult"]
 
@@ -203,35 +204,7 @@ class PairFlockCore:
     # ------------------------------------------------------------------ seeding
     @staticmethod
     def _make_rngs(seed: Any, n: int) -> list[np.random.Generator]:
-        if seed is None or isinstance(seed, (int, np.integer, np.random.SeedSequence)):
-            if isinstance(seed, bool):
-                raise TypeError(f"seed={seed!r} is invalid: must be an int, a SeedSequence or None")
-            if isinstance(seed, (int, np.integer)) and seed < 0:
-                raise ValueError(f"seed={seed!r} is invalid: must be >= 0")
-            ss = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
-            return [np.random.default_rng(c) for c in ss.spawn(n)]
-        if isinstance(seed, Sequence) and not isinstance(seed, str):
-            if len(seed) != n:
-                raise ValueError(
-                    f"seed has {len(seed)} entries, expected {n} (one per swarm reset)"
-                )
-            out = []
-            for s in seed:
-                if s is None:
-                    out.append(None)
-                elif isinstance(s, np.random.SeedSequence) or (
-                    isinstance(s, (int, np.integer)) and not isinstance(s, bool) and s >= 0
-                ):
-                    out.append(np.random.default_rng(s))
-                else:
-                    raise ValueError(
-                        f"seed entry {s!r} is invalid: must be an int >= 0, a SeedSequence or None"
-                    )
-            return out
-        raise TypeError(
-            f"seed={seed!r} is invalid: must be None, an int >= 0, a SeedSequence or a "
-            "sequence of those (one per swarm)"
-        )
+        return swarm_generators(seed, n)
 
     # ------------------------------------------------------------------ reset
     def reset(self, seed: Any = None, options: Mapping[str, Any] | None = None) -> StepResult:

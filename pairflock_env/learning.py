@@ -3,10 +3,10 @@
 The env's observation is physical (SI units, world frame; see :mod:`.observations`) and its
 action is a world-frame pair acceleration in units of ``pair_accel_limit``: that is what the
 analytic controllers read and write. A neural network learns faster and generalises better in
-a frame that matches the task, so the learning views (Gymnasium, SB3) and the ``sb3:`` policy
-loader put an *interface* between the env and the network. There are two, both pure
-functions of the env's own observation and action (one implementation, shared by every view
-and by the loader, so training and evaluation cannot drift apart):
+a frame that matches the task, so the views (``interface=`` on PettingZoo, Gymnasium and SB3)
+and the ``sb3:`` policy loader put an *interface* between the env and the network. There are
+two, both pure functions of the env's own observation and action (one implementation, shared
+by every view and by the loader, so training and evaluation cannot drift apart):
 
 ``"world"``
     the identity: raw observation, raw action, the core's reward (``pairflock_env.rewards``).
@@ -76,8 +76,11 @@ and by the loader, so training and evaluation cannot drift apart):
     decisions, not 350) and cuts the network's cost per simulated second, which is what lets
     PPO learn the task in minutes; the flocking protocol, the physics and the feed-forward
     still run at the paper's 100 Hz. The ``sb3:`` loader holds the action the same way
-    (through SB3's ``predict`` state).
+    (through SB3's ``predict`` state); both use :class:`pairflock_env.decision.DecisionHold`.
 
+Each interface declares the box of its observations (:meth:`LearningInterface.observation_bounds`:
+the physical bounds of :mod:`pairflock_env.spaces` for ``"world"``, [-5, 5] for ``"pair"``)
+and the range of its reward (``reward_range``), both derived from the config.
 ``make_interface(name, config, **params)`` builds one; ``interface.to_dict()`` /
 ``interface_from_dict(d, config)`` store it with a trained model so that the loader rebuilds
 the same transform for any env it is evaluated on.
@@ -96,6 +99,12 @@ from .config.fields import UnknownFieldError
 from .config.frame import FRAME_SCHEMA, PairFrameParams
 from .observations import ObsLayout
 from .rewards import DIVERGENCE_PENALTY
+from .spaces import (
+    core_reward_range,
+    pair_error_bound,
+    physical_observation_bounds,
+    separation_bound,
+)
 
 __all__ = [
     "INTERFACES",
@@ -178,6 +187,17 @@ class LearningInterface:
     #: every entry of an encoded observation lies in [-observation_bound, observation_bound]
     observation_bound: float = np.inf
 
+    def observation_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(low, high), each float32 (observation_size,): the box every encoded observation
+        lies in (what the views' observation spaces are)."""
+        b = np.full(self.observation_size, self.observation_bound, np.float32)
+        return -b, b
+
+    @property
+    def reward_range(self) -> tuple[float, float]:  # pragma: no cover - abstract
+        """(low, high): every per-agent reward of :meth:`reward` lies in this range."""
+        raise NotImplementedError
+
     @property
     def observation_size(self) -> int:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -205,14 +225,17 @@ class LearningInterface:
     def to_dict(self) -> dict[str, Any]:
         return {"name": self.name, "decision_period": self.decision_period}
 
-    def _check_obs(self, obs: np.ndarray) -> np.ndarray:
+    def _check_obs_shape(self, obs: np.ndarray) -> np.ndarray:
         obs = np.asarray(obs)
         if obs.shape[-1:] != (self.layout.size,):
             raise ValueError(
                 f"observation has shape {obs.shape}; expected (..., {self.layout.size}) "
                 f"(dim={self.config.dim}, obs_neighbors={self.config.obs_neighbors})"
             )
-        return obs.astype(np.float64, copy=False)
+        return obs
+
+    def _check_obs(self, obs: np.ndarray) -> np.ndarray:
+        return self._check_obs_shape(obs).astype(np.float64, copy=False)
 
     def _check_action(self, action: np.ndarray, lead: tuple[int, ...]) -> np.ndarray:
         a = np.asarray(action, dtype=np.float64)
@@ -232,17 +255,37 @@ class WorldInterface(LearningInterface):
     def __init__(self, config: PairFlockConfig, decision_period: int = 1) -> None:
         super().__init__(config)
         self.decision_period = _check_period(decision_period)
+        self._bounds: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def observation_size(self) -> int:
         return self.layout.size
 
+    def _box(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._bounds is None:
+            self._bounds = physical_observation_bounds(self.config)
+        return self._bounds
+
+    def observation_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The physical observation's box, derived from the config
+        (:func:`~pairflock_env.spaces.physical_observation_bounds`)."""
+        low, high = self._box()
+        return low.copy(), high.copy()
+
+    @property
+    def reward_range(self) -> tuple[float, float]:
+        """The core's reward range (:func:`~pairflock_env.spaces.core_reward_range`)."""
+        return core_reward_range(self.config)
+
     def encode(self, obs: np.ndarray) -> np.ndarray:
-        return self._check_obs(obs).astype(np.float32)
+        """The physical observation as float32, inside :meth:`observation_bounds` (only
+        observation noise beyond ``NOISE_SIGMAS`` standard deviations is ever clipped)."""
+        obs = self._check_obs_shape(obs)
+        low, high = self._box()
+        return np.clip(obs.astype(np.float32, copy=False), low, high)
 
     def decode(self, obs: np.ndarray, action: np.ndarray) -> np.ndarray:
-        obs = self._check_obs(obs)
-        return self._check_action(action, obs.shape[:-1])
+        return self._check_action(action, self._check_obs_shape(obs).shape[:-1])
 
     def reward(self, reward, info, action, obs=None):
         return np.asarray(reward, dtype=np.float64)
@@ -417,10 +460,31 @@ class PairFrameInterface(LearningInterface):
         r -= p.w_effort * np.einsum("...k,...k->...", a, a) / cfg.dim
         r -= p.w_separation * np.maximum(0.0, p.separation_distance - sep) / p.separation_distance
         r -= p.w_collision * (sep < cfg.collision_distance)
-        r -= p.w_cohesion * np.maximum(0.0, sep - p.cohesion_distance) / p.position_scale
+        # a UAV with no other UAV at all (n_uavs = 2) has no flock to leave
+        far = np.where(np.isfinite(sep), np.maximum(0.0, sep - p.cohesion_distance), 0.0)
+        r -= p.w_cohesion * far / p.position_scale
         diverged = np.asarray(info["diverged"], dtype=bool)
         r[diverged] = -DIVERGENCE_PENALTY
         return r
+
+    @property
+    def reward_range(self) -> tuple[float, float]:
+        """(low, 0): the worst case of every term at once, with the largest pair error and
+        separation a non-diverged state allows (:func:`~pairflock_env.spaces.pair_error_bound`),
+        or ``-DIVERGENCE_PENALTY``. Typical rewards are of order one per control step (see
+        ``docs/clients.md``), far inside this guaranteed range."""
+        p = self.params
+        e, s = pair_error_bound(self.config), separation_bound(self.config)
+        worst = (
+            p.w_error * np.log1p(e / p.error_scale)
+            + p.w_progress * e / p.position_scale
+            + p.w_band
+            + p.w_effort
+            + p.w_separation
+            + p.w_collision
+            + p.w_cohesion * max(0.0, s - p.cohesion_distance) / p.position_scale
+        )
+        return -max(float(worst) * (1 + 1e-6), DIVERGENCE_PENALTY), 0.0
 
     def to_dict(self) -> dict[str, Any]:
         return {"name": self.name, **dataclasses.asdict(self.params)}

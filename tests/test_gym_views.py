@@ -15,7 +15,7 @@ from gymnasium.vector import AutoresetMode
 import pairflock_env
 from pairflock_env import ENV_ID, make_config, parallel_env
 from pairflock_env.core import PairFlockCore
-from pairflock_env.envs.vector import PairFlockVectorEnv
+from pairflock_env.envs.vector import PairFlockGymVectorEnv
 from pairflock_env.learning import interface_from_dict, make_interface, pair_basis
 
 SMALL = dict(n_uavs=12, pair_accel_limit=50.0)
@@ -28,13 +28,12 @@ def _check(env):
         check_env(env)
 
 
-@pytest.mark.parametrize("frame", ["pair", "world"])
-def test_registered_env_passes_gymnasium_check_env(frame):
-    env = gym.make(ENV_ID, frame=frame, **SMALL)
-    with warnings.catch_warnings():
-        if frame == "world":  # physical observations are unbounded by design
-            warnings.filterwarnings("ignore", message=".*Box observation space.*infinity.*")
-        _check(env.unwrapped)
+@pytest.mark.parametrize("interface", ["pair", "world"])
+def test_registered_env_passes_gymnasium_check_env(interface):
+    env = gym.make(ENV_ID, interface=interface, **SMALL)
+    _check(env.unwrapped)
+    assert np.isfinite(env.observation_space.low).all()
+    assert np.isfinite(env.observation_space.high).all()
     obs, info = env.reset(seed=3)
     assert obs.shape == env.observation_space.shape and obs.dtype == np.float32
     assert env.action_space.shape == (2 * 2,)
@@ -51,8 +50,9 @@ def test_pair_frame_env_passes_sb3_check_env():
 
 
 def test_world_frame_single_env_matches_pettingzoo():
-    """frame="world": the same physics, observation and (mean) reward as the PettingZoo env."""
-    g = gym.make(ENV_ID, frame="world", **SMALL).unwrapped
+    """interface="world": the same physics, observation and (mean) reward as the PettingZoo
+    env."""
+    g = gym.make(ENV_ID, interface="world", **SMALL).unwrapped
     p = parallel_env(**SMALL)
     og, _ = g.reset(seed=7)
     op, _ = p.reset(seed=7)
@@ -81,7 +81,7 @@ def test_vector_entry_point_equals_sync_vector_env(mode):
     native = gym.make_vec(
         ENV_ID, num_envs=3, vectorization_mode="vector_entry_point", autoreset_mode=mode, **kw
     )
-    assert isinstance(native.unwrapped, PairFlockVectorEnv)
+    assert isinstance(native.unwrapped, PairFlockGymVectorEnv)
     sync = gym.make_vec(
         ENV_ID, num_envs=3, vectorization_mode="sync", vector_kwargs={"autoreset_mode": mode}, **kw
     )
@@ -105,7 +105,7 @@ def test_vector_entry_point_equals_sync_vector_env(mode):
 
 
 def test_vector_env_reset_mask_and_bad_actions_leave_state_unchanged():
-    v = PairFlockVectorEnv(num_envs=2, **SMALL)
+    v = PairFlockGymVectorEnv(num_envs=2, **SMALL)
     _obs, _ = v.reset(seed=[4, 5])
     q0 = v.core.q.copy()
     for bad, exc in [
@@ -135,10 +135,12 @@ def test_single_env_rejects_bad_input():
         env.step(np.zeros((2, 2)))
     with pytest.raises(ValueError, match="seed"):
         env.reset(seed=-1)
-    with pytest.raises(ValueError, match="frame"):
-        gym.make(ENV_ID, frame="polar")
+    with pytest.raises(ValueError, match="interface"):
+        gym.make(ENV_ID, interface="polar")
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="frame"):
+        gym.make(ENV_ID, frame="polar")  # the deprecated alias is named as the caller wrote it
     with pytest.raises(ValueError, match="w_error"):
-        gym.make(ENV_ID, frame_params={"w_error": -1.0})
+        gym.make(ENV_ID, interface_params={"w_error": -1.0})
     with pytest.raises(ValueError, match=r"did you mean|Did you mean"):
         gym.make(ENV_ID, n_uav=20)
 
@@ -278,3 +280,13 @@ def test_learning_views_fly_the_quadrotor():
         obs, r, _term, _trunc, info = envs.step(envs.action_space.sample())
         assert np.isfinite(obs).all() and np.isfinite(r).all()
     assert not info["crashed"].any()
+
+
+def test_pair_reward_is_finite_without_any_other_uav():
+    """n_uavs=2: no non-partner UAV, so min_separation is inf; the cohesion term must not turn
+    that into an infinite reward (it gave -inf before)."""
+    env = gym.make(ENV_ID, n_uavs=2, max_cycles=20).unwrapped
+    env.reset(seed=0)
+    _, r, *_ = env.step(np.zeros(4))
+    low, high = env.reward_range
+    assert np.isfinite(r) and low <= r <= high

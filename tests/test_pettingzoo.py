@@ -163,3 +163,149 @@ def test_infos_hold_the_documented_keys(small_kwargs):
 def test_invalid_render_mode():
     with pytest.raises(ValueError, match="render_mode"):
         parallel_env(render_mode="ascii")
+
+
+# ------------------------------------------------------------------ state, spaces, clients
+def test_state_and_state_space_follow_pettingzoo_state_test(small_kwargs):
+    from pettingzoo.test.state_test import state_test
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UserWarning)  # no "infinite state space" warning
+        state_test(aec_env(**small_kwargs, max_cycles=30), parallel_env(**small_kwargs))
+    env = parallel_env(**small_kwargs)
+    with pytest.raises(RuntimeError, match="reset"):
+        env.state()
+    env.reset(seed=0)
+    s = env.state()
+    lay = env.state_layout
+    assert s.dtype == np.float32 and s.shape == env.state_space.shape == (lay.size,)
+    assert np.isfinite(env.state_space.low).all() and np.isfinite(env.state_space.high).all()
+    lq, lp = env.core.leader_state()
+    np.testing.assert_allclose(lay.get(s, "positions"), env.core.q[0] - lq[0], rtol=1e-6)
+    np.testing.assert_allclose(lay.get(s, "velocities"), env.core.p[0] - lp[0], rtol=1e-6)
+    assert lay.get(s, "time_fraction")[0] == 0.0
+    assert "positions" in type(env).__doc__ and "time_fraction" in type(env).__doc__
+
+
+@pytest.mark.parametrize(
+    "extra",
+    [
+        {},
+        {"obs_noise_position": 0.5, "obs_noise_velocity": 0.2, "partner_delay": 3},
+        {"leader": "climb_and_turn", "leader_turns": ((0.1, 0.2, 90.0),), "pinning": 2},
+        {"divergence_limit": 120.0, "pair_accel_limit": 2000.0},  # some swarms diverge
+    ],
+)
+def test_observations_and_states_lie_in_their_bounded_spaces(extra, small_kwargs):
+    """The physical observation space is finite and derived from the config; every emitted
+    observation and state lies in it, also under noise, delay, a turning leader and
+    divergence (full-throttle actions)."""
+    env = parallel_env(**small_kwargs, max_cycles=40, **extra)
+    space = env.observation_space("uav_0")
+    assert np.isfinite(space.low).all() and np.isfinite(space.high).all()
+    rng = np.random.default_rng(0)
+    ended = 0
+    for seed in range(3):
+        obs, _ = env.reset(seed=seed)
+        while env.agents:
+            for a in env.agents:
+                assert env.observation_space(a).contains(obs[a]), a
+            assert env.state_space.contains(env.state())
+            act = {a: rng.choice([-3.0, 3.0], env.config.dim) for a in env.agents}
+            obs, rew, term, _, _ = env.step(act)
+            assert all(env.reward_range[0] <= r <= 0 for r in rew.values())
+            ended += any(term.values())
+        for a in obs:
+            assert env.observation_space(a).contains(obs[a])
+    if "divergence_limit" in extra and env.config.dynamics == "particle":
+        assert ended  # the bounds hold across divergence (last finite observation kept)
+
+
+def test_raw_reward_scale_and_the_bounded_pair_interface():
+    """The raw reward is metres of pair error per step (about -250 at the paper's start); the
+    pair interface's reward is normalised and lies in its documented, finite range."""
+    raw = parallel_env(n_uavs=12)
+    raw.reset(seed=0)
+    _, r_raw, *_ = raw.step({a: np.zeros(2) for a in raw.agents})
+    assert r_raw["uav_0"] < -200
+    env = parallel_env(n_uavs=12, interface="pair", max_cycles=60)
+    low, high = env.reward_range
+    assert np.isfinite(low) and high == 0.0
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space("uav_0").shape == (env.interface.observation_size,)
+    rng = np.random.default_rng(1)
+    rewards = []
+    while env.agents:
+        for a in env.agents:
+            assert env.observation_space(a).contains(obs[a])
+            assert np.abs(obs[a]).max() <= 5.0
+        obs, rew, _, _, infos = env.step({a: rng.uniform(-1, 1, 2) for a in env.agents})
+        rewards += list(rew.values())
+    assert all(low <= r <= high for r in rewards)
+    assert max(abs(r) for r in rewards) < 10  # of order one, not hundreds
+    assert infos["uav_0"]["sim_time"] == pytest.approx(0.6)  # 12 decisions of 5 control steps
+
+
+def test_pair_interface_on_the_pettingzoo_api(small_kwargs):
+    parallel_api_test(parallel_env(**small_kwargs, max_cycles=30, interface="pair"), 40)
+    api_test(aec_env(**small_kwargs, max_cycles=30, interface="pair"), num_cycles=40)
+
+
+def test_infos_hold_numbers_only_and_partners_are_an_env_property():
+    env = parallel_env(n_uavs=12, pairs=((0, 1), (2, 3)))
+    _, infos = env.reset(seed=0)
+    for info in infos.values():
+        for k, v in info.items():
+            assert isinstance(v, (int, float, bool)), (k, v)
+    assert infos["uav_2"]["partner_index"] == 3 and infos["uav_3"]["uav_index"] == 3
+    assert env.partners == {"uav_0": "uav_1", "uav_1": "uav_0", "uav_2": "uav_3", "uav_3": "uav_2"}
+
+
+# ------------------------------------------------------------------ AEC: per-step validation
+def _aec_snapshot(e):
+    from view_helpers import snapshot
+
+    return snapshot(e.env)  # the AEC env: its stored actions, selection and the parallel env
+
+
+@pytest.mark.parametrize(
+    "bad, exc",
+    [
+        (np.array([np.nan, 0.0]), ValueError),
+        (np.array([0.0, np.inf]), ValueError),
+        (np.zeros(3), ValueError),
+        (np.array(["a", "b"]), TypeError),
+        ("go", TypeError),
+        (None, TypeError),
+    ],
+)
+def test_aec_validates_each_action_at_its_own_step(bad, exc):
+    e = aec_env(n_uavs=12)
+    e.reset(seed=0)
+    e.step(np.zeros(2))  # uav_0 acted; uav_1 is next
+    before = _aec_snapshot(e)
+    with pytest.raises(exc, match="uav_1"):
+        e.step(bad)
+    assert _aec_snapshot(e) == before
+    e.step(np.zeros(2))  # the cycle completes normally
+    assert e.agent_selection == "uav_0" and e.unwrapped.core.steps[0] == 1
+
+
+def test_aec_lifecycle_errors_are_clear():
+    e = aec_env(n_uavs=12, max_cycles=1)
+    for call in (lambda: e.step(np.zeros(2)), e.render, e.state, lambda: e.observe("uav_0")):
+        with pytest.raises(RuntimeError, match="reset"):
+            call()
+    e.reset(seed=0)
+    e.step(np.zeros(2))
+    e.step(np.zeros(2))  # the episode is truncated after one control step
+    assert e.truncations["uav_0"]
+    with pytest.raises(RuntimeError, match="ended"):
+        e.step(np.zeros(2))  # a done agent is stepped with None
+    e.step(None)
+    e.step(None)
+    assert e.agents == []
+    with pytest.raises(RuntimeError, match="ended"):
+        e.step(None)
+    e.reset(seed=1)
+    assert e.agents == ["uav_0", "uav_1"]

@@ -9,25 +9,25 @@ pytest.importorskip("stable_baselines3")
 
 import gymnasium as gym
 from stable_baselines3 import PPO
-from stable_baselines3.common.vec_env import DummyVecEnv, VecCheckNan, VecMonitor
+from stable_baselines3.common.vec_env import DummyVecEnv, VecCheckNan, VecEnv, VecMonitor
 
 from baselines import make_pair_policy
 from baselines.rollout import rollout, trace_metrics
 from pairflock_env import ENV_ID, make_config, parallel_env
-from pairflock_env.envs import PairFlockVecEnv
+from pairflock_env.envs import PairFlockSB3VecEnv
 
 SMALL = dict(n_uavs=12, pair_accel_limit=50.0)
 
 
-@pytest.mark.parametrize("frame", ["pair", "world"])
-def test_native_vecenv_follows_dummy_vec_env_exactly(frame):
+@pytest.mark.parametrize("interface", ["pair", "world"])
+def test_native_vecenv_follows_dummy_vec_env_exactly(interface):
     """Rows b*M+m of the native VecEnv == agent m of sub-env b of a DummyVecEnv over the
     Gymnasium single env: observations, rewards, dones, terminal_observation and
     TimeLimit.truncated, through several auto-resets, with per-swarm seeds from seed()."""
     B, M, steps = 3, 2, 9
-    cycles = 13 if frame == "pair" else 4  # pair: 3 decisions of 5 steps (the last cut short)
-    kw = dict(SMALL, frame=frame, max_cycles=cycles)
-    native = PairFlockVecEnv(num_swarms=B, **kw)
+    cycles = 13 if interface == "pair" else 4  # pair: 3 decisions of 5 steps (the last cut short)
+    kw = dict(SMALL, interface=interface, max_cycles=cycles)
+    native = PairFlockSB3VecEnv(num_swarms=B, **kw)
     dummy = DummyVecEnv([lambda: gym.make(ENV_ID, **kw) for _ in range(B)])
     assert native.num_envs == B * M
     assert native.seed(21) == [21, 21, 22, 22, 23, 23]
@@ -59,7 +59,7 @@ def test_native_vecenv_follows_dummy_vec_env_exactly(frame):
 
 
 def test_seed_matches_pettingzoo_and_options_apply_per_swarm():
-    env = PairFlockVecEnv(num_swarms=2, frame="world", **SMALL)
+    env = PairFlockSB3VecEnv(num_swarms=2, interface="world", **SMALL)
     env.seed(5)
     obs = env.reset().reshape(2, 2, -1)
     for b in range(2):
@@ -78,7 +78,7 @@ def test_seed_matches_pettingzoo_and_options_apply_per_swarm():
 
 
 def test_attributes_methods_and_bad_actions():
-    env = PairFlockVecEnv(num_swarms=2, render_mode="rgb_array", **SMALL)
+    env = PairFlockSB3VecEnv(num_swarms=2, render_mode="rgb_array", **SMALL)
     env.reset()
     assert env.get_attr("agent") == ["uav_0", "uav_1", "uav_0", "uav_1"]
     assert env.get_attr("swarm", indices=[1, 2]) == [0, 1]
@@ -106,13 +106,13 @@ def test_attributes_methods_and_bad_actions():
             env.step(bad)
         np.testing.assert_array_equal(env.core.q, q0)
     with pytest.raises(ValueError, match="info_keys"):
-        PairFlockVecEnv(info_keys=["pair_eror"])
+        PairFlockSB3VecEnv(info_keys=["pair_eror"])
     with pytest.raises(IndexError):
         env.get_attr("agent", indices=[9])
 
 
 def test_state_snapshot_continues_identically():
-    env = PairFlockVecEnv(num_swarms=2, seed=3, max_cycles=20, **SMALL)
+    env = PairFlockSB3VecEnv(num_swarms=2, seed=3, max_cycles=20, **SMALL)
     env.reset()
     a = np.full((4, 2), 0.3, np.float32)
     env.step(a)
@@ -125,12 +125,12 @@ def test_state_snapshot_continues_identically():
         np.testing.assert_array_equal(x[1], y[1])
         np.testing.assert_array_equal(x[2], y[2])
     with pytest.raises(ValueError, match="different config"):
-        PairFlockVecEnv(num_swarms=2, n_uavs=13).set_state(snap)
+        PairFlockSB3VecEnv(num_swarms=2, n_uavs=13).set_state(snap)
 
 
 def test_sb3_wrappers_and_ppo_train_on_native_vecenv():
     env = VecCheckNan(
-        VecMonitor(PairFlockVecEnv(num_swarms=2, max_cycles=30, info_keys="all", **SMALL)),
+        VecMonitor(PairFlockSB3VecEnv(num_swarms=2, max_cycles=30, info_keys="all", **SMALL)),
         raise_exception=True,
     )
     model = PPO("MlpPolicy", env, n_steps=16, batch_size=32, n_epochs=1, seed=0, device="cpu")
@@ -145,7 +145,7 @@ def test_sb3_loader_in_the_action_slot(tmp_path):
     the env's standard observation; it holds its decision for decision_period steps."""
     from baselines.sb3_policy import METADATA_KEY
 
-    venv = PairFlockVecEnv(num_swarms=1, **SMALL)
+    venv = PairFlockSB3VecEnv(num_swarms=1, **SMALL)
     model = PPO("MlpPolicy", venv, n_steps=8, batch_size=16, n_epochs=1, seed=0, device="cpu")
     setattr(model, METADATA_KEY, {"algo": "PPO", "interface": venv.interface.to_dict()})
     path = tmp_path / "m.zip"
@@ -184,3 +184,58 @@ def test_committed_policy_keeps_its_budget_in_the_paper_env():
     tr = rollout(cfg, make_pair_policy(f"sb3:{model}", cfg), [10000])
     assert np.linalg.norm(tr.u, axis=-1).max() <= 50.0 * (1 + 1e-6)  # float32 actions
     assert np.abs(tr.pair_error[0, :, -1]).max() < 0.5
+
+
+def test_per_swarm_options_are_all_validated_before_any_swarm_resets():
+    """Swarm 1's bad options raise before swarm 0 is reset (validate everything, then apply)."""
+    from view_helpers import snapshot
+
+    env = PairFlockSB3VecEnv(num_swarms=2, **SMALL)
+    env.reset()
+    env.step(np.zeros((4, 2), np.float32))
+    q = np.arange(24.0).reshape(12, 2) * 3.0
+    for bad, exc in [
+        (np.full((12, 2), np.nan), ValueError),
+        (np.zeros((11, 2)), ValueError),
+        ([["a", "b"]] * 12, TypeError),
+    ]:
+        opts = [{"positions": q}] * 2 + [{"positions": bad}] * 2
+        before = snapshot(env)
+        with pytest.raises(exc, match="row 2"):
+            env.set_options(opts)  # checked where it is received
+        assert snapshot(env) == before
+        VecEnv.set_options(env, opts)  # stored unchecked, as SB3's own set_options does
+        before = snapshot(env)
+        with pytest.raises(exc, match="swarm 1"):
+            env.reset()
+        assert snapshot(env) == before
+    with pytest.raises(ValueError, match="entries"):
+        env.set_options([{}] * 3)
+    env.set_options([{"positions": q}] * 2 + [{"velocities": np.ones((12, 2))}] * 2)
+    env.reset()
+    np.testing.assert_array_equal(env.core.q[0], q)
+    np.testing.assert_array_equal(env.core.p[1], np.ones((12, 2)))
+
+
+def test_names_say_what_they_count_and_old_names_still_work():
+    import pairflock_env
+    from pairflock_env.envs import sb3
+
+    env = PairFlockSB3VecEnv(num_swarms=3, **SMALL)
+    assert (env.num_swarms, env.num_rows, env.num_envs, env.agents_per_swarm) == (3, 6, 6, 2)
+    vec = pairflock_env.PairFlockGymVectorEnv(num_envs=3, **SMALL)
+    assert (vec.num_swarms, vec.num_rows, vec.num_envs) == (3, 3, 3)
+    with pytest.warns(DeprecationWarning, match="PairFlockSB3VecEnv"):
+        assert sb3.PairFlockVecEnv is PairFlockSB3VecEnv
+    with pytest.warns(DeprecationWarning, match="PairFlockSB3VecEnv"):
+        from pairflock_env.envs import PairFlockVecEnv
+    assert PairFlockVecEnv is PairFlockSB3VecEnv
+    with pytest.warns(DeprecationWarning, match="PairFlockGymVectorEnv"):
+        assert pairflock_env.PairFlockVectorEnv is pairflock_env.PairFlockGymVectorEnv
+    with pytest.warns(DeprecationWarning, match="interface="):
+        old = PairFlockSB3VecEnv(num_swarms=1, frame="world", frame_params={}, **SMALL)
+    assert old.interface_name == "world"
+    with pytest.warns(DeprecationWarning), pytest.raises(TypeError, match="not both"):
+        PairFlockSB3VecEnv(interface="pair", frame="world", **SMALL)
+    with pytest.warns(DeprecationWarning, match="interface_name"):
+        assert old.frame == "world"

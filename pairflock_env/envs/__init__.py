@@ -1,30 +1,46 @@
 """API views over :class:`pairflock_env.core.PairFlockCore`.
 
-PettingZoo (``parallel_env``, ``env``), Gymnasium (``PairFlockGymEnv``, ``PairFlockVectorEnv``)
-and stable-baselines3 (``PairFlockVecEnv``, imported on first use so that SB3 and torch are
-loaded only by code that needs them).
+PettingZoo (``parallel_env``, ``env``: :class:`PairFlockParallelEnv`,
+:class:`~pairflock_env.envs.aec.PairFlockAECEnv`), Gymnasium (:class:`PairFlockGymEnv`,
+:class:`PairFlockGymVectorEnv`: one row per swarm) and stable-baselines3
+(``PairFlockSB3VecEnv``: one row per paired UAV, imported on first use so that SB3 and torch
+are loaded only by code that needs them). ``PairFlockVectorEnv`` and ``PairFlockVecEnv`` are
+the deprecated former names of the two vector envs.
 """
 
+from typing import Any
+
+from ._common import deprecated_attr
+from .aec import PairFlockAECEnv
 from .parallel import PairFlockParallelEnv, agent_name, env, parallel_env, raw_env
 from .single import ENV_ID, PairFlockGymEnv
-from .vector import PairFlockVectorEnv
+from .vector import PairFlockGymVectorEnv
 
 __all__ = [
     "ENV_ID",
+    "PairFlockAECEnv",
     "PairFlockGymEnv",
+    "PairFlockGymVectorEnv",
     "PairFlockParallelEnv",
-    "PairFlockVecEnv",
-    "PairFlockVectorEnv",
+    "PairFlockSB3VecEnv",
     "agent_name",
     "env",
     "parallel_env",
     "raw_env",
 ]
 
+_DEPRECATED = {
+    "PairFlockVectorEnv": "PairFlockGymVectorEnv",
+    "PairFlockVecEnv": "PairFlockSB3VecEnv",
+}
 
-def __getattr__(name: str):
-    if name == "PairFlockVecEnv":  # lazy: imports stable-baselines3 (and torch)
-        from .sb3 import PairFlockVecEnv
 
-        return PairFlockVecEnv
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+def __getattr__(name: str) -> Any:
+    namespace = globals()
+    if name in ("PairFlockSB3VecEnv", "PairFlockVecEnv"):  # lazy: imports SB3 (and torch)
+        from . import sb3
+
+        if name == "PairFlockSB3VecEnv":
+            return sb3.PairFlockSB3VecEnv
+        namespace = vars(sb3)
+    return deprecated_attr(__name__, name, _DEPRECATED, namespace)

@@ -2,25 +2,35 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
-from pettingzoo.utils.conversions import parallel_to_aec
 
-from ..config import PairFlockConfig, make_config
-from ..core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore, real_array
+from ..config import PairFlockConfig
+from ..core import AGENT_INFO_KEYS, SWARM_INFO_KEYS
 from ..observations import ObsLayout
-from ..render import SwarmRenderer
+from ..seeding import check_seed
+from ..spaces import StateLayout, global_state, state_bounds
+from ._common import (
+    RENDER_MODES,
+    UNSET,
+    SwarmFrames,
+    ViewLifecycle,
+    build_core_and_interface,
+    check_policy_actions,
+    held_step,
+    resolve_interface_args,
+)
 
 __all__ = ["PairFlockParallelEnv", "agent_name", "env", "parallel_env", "raw_env"]
 
-RENDER_MODES = ("rgb_array", "human")
-
 
 def agent_name(uav_index: int) -> str:
+    """The agent name of UAV ``uav_index``: ``"uav_<i>"``."""
     return f"uav_{uav_index}"
 
 
@@ -34,26 +44,48 @@ the agents' actions. The paper's sliding-mode controller (eq. 28), its proportio
 (``baselines.make_pair_policy``).
 
 ## Agents
-``uav_<i>`` for every UAV i of ``config.pairs`` (default ``uav_0`` and ``uav_1``).
+``uav_<i>`` for every UAV i of ``config.pairs`` (default ``uav_0`` and ``uav_1``);
+``env.partners`` maps each agent to its partner's name.
+
+## Interfaces
+``interface="world"`` (default) is the physical env below. ``interface="pair"`` gives each
+agent the learning interface of the Gymnasium view (:mod:`pairflock_env.learning`): the
+normalised pair-frame observation in ``[-5, 5]``, a pair-frame action on top of a
+feed-forward, the bounded pair-frame reward, and one ``step`` per policy decision (the action
+is held for ``decision_period`` control steps, the reward is their mean).
+``interface_params`` sets its parameters.
 
 ## Action space
 ``Box(-1, 1, (dim,), float32)``: the UAV's pairwise acceleration in the world frame, in units
 of ``pair_accel_limit`` m/s^2 (action 1.0 = ``pair_accel_limit``; 1000 m/s^2 in the paper
 preset, above the ~420 m/s^2 peak of sliding mode). Finite values outside [-1, 1] are clipped
 per component and reported in ``infos[agent]["action_clipped"]``; NaN/inf, a wrong shape, a
-non-numeric dtype, or a missing/unknown agent raise an exception and leave the env unchanged.
+non-numeric dtype, or a missing/unknown agent raise an exception and leave the env unchanged
+(``docs/bad-input.md``).
 
 ## Observation space
-``Box(-inf, inf, (obs_size,), float32)``, physical units, relative to the observing UAV.
-The layout below is for dim = 2 and ``obs_neighbors`` = 6; read fields by name with
+``Box(low, high, (obs_size,), float32)``, physical units, relative to the observing UAV, with
+finite bounds derived from the config (:mod:`pairflock_env.spaces`: positions within
+``divergence_limit``, flocking commands bounded by the gains). The layout below is for
+dim = 2 and ``obs_neighbors`` = 6; read fields by name with
 ``env.layout.get(obs, "partner_offset")``.
 
 {table}
 
+## State (centralised critics)
+``env.state()`` is the swarm's global state, float32, in ``env.state_space`` (bounded like
+the observation; a diverged swarm's state, at the end of its episode, is clipped into it);
+``env.state_layout`` names its fields (shown for 3 UAVs in 2-D):
+
+{state_table}
+
 ## Rewards
 Per agent, a sum of penalties (see ``pairflock_env.rewards``):
 ``-w_err |pair error| - w_u (||u|| / limit)^2 - w_sep max(0, safe - sep)/safe
-- w_col [sep < collision_distance]``; ``-100`` on the step a swarm diverges.
+- w_col [sep < collision_distance]``; ``-100`` on the step a swarm diverges. The scale is
+metres of pair error per control step: about -250 per agent-step at the paper's start and
+episode returns of order -1e5. ``interface="pair"`` gives a normalised reward of order one
+per step; ``env.reward_range`` is the guaranteed range of either.
 
 ## Vehicle models
 ``dynamics="particle"`` (default): every UAV is a double integrator of the commanded
@@ -77,18 +109,22 @@ with ``max_cycles`` or ``horizon``). Termination when the state diverges (non-fi
 beyond ``divergence_limit``; ``infos[agent]["diverged"]``), on a collision when
 ``terminate_on_collision=True``, or when a quadrotor crashes (flipped beyond
 ``quad_crash_tilt`` or below ``quad_ground_altitude``; ``infos[agent]["vehicle_terminated"]``).
-All agents end together.
+All agents end together. ``step`` after the end, ``step``/``render``/``state`` before
+``reset`` and ``reset``/``step`` after ``close`` raise ``RuntimeError``.
 
 ## Infos (per agent)
-{info_keys}, plus ``reward_<term>`` for each reward term. With ``dynamics="quadrotor"`` also
-``crashed``, ``motor_saturated``, ``accel_limited``, ``tilt`` (deg) of the agent and the swarm
-counts ``vehicle_terminated``, ``crashed_uavs``, ``motor_saturated_uavs``,
-``accel_limited_uavs``.
+Numbers only: {info_keys}, plus ``reward_<term>`` for each reward term, ``uav_index`` and
+``partner_index`` (UAV indices). With ``dynamics="quadrotor"`` also ``crashed``,
+``motor_saturated``, ``accel_limited``, ``tilt`` (deg) of the agent and the swarm counts
+``vehicle_terminated``, ``crashed_uavs``, ``motor_saturated_uavs``, ``accel_limited_uavs``.
 
 ## Arguments
-``preset`` (default ``"paper"``), ``config`` (a ``PairFlockConfig``), ``render_mode``
-(``"rgb_array"`` or ``"human"``) and any ``PairFlockConfig`` field as a keyword
-(``n_uavs=100``, ``d_m=4.0``, ``max_cycles=500``, ...).
+``preset`` (default ``"paper"``), ``config`` (a ``PairFlockConfig``), ``interface``
+(``"world"`` or ``"pair"``), ``interface_params`` (dict), ``render_mode`` (``"rgb_array"`` or
+``"human"``), ``seed`` (of the swarm generator when ``reset`` gets none) and any
+``PairFlockConfig`` field as a keyword (``n_uavs=100``, ``d_m=4.0``, ``max_cycles=500``,
+...). ``frame`` / ``frame_params`` are deprecated aliases of ``interface`` /
+``interface_params``.
 
 ## Example
 >>> from pairflock_env import parallel_env
@@ -104,9 +140,10 @@ counts ``vehicle_terminated``, ``crashed_uavs``, ``motor_saturated_uavs``,
 """
 
 
-class PairFlockParallelEnv(ParallelEnv):
+class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
     __doc__ = _DOC.format(
         table=ObsLayout(2, 6).markdown_table(),
+        state_table=StateLayout(3, 2).markdown_table(),
         info_keys=", ".join(f"``{k}``" for k in AGENT_INFO_KEYS + SWARM_INFO_KEYS),
     )
 
@@ -122,37 +159,44 @@ class PairFlockParallelEnv(ParallelEnv):
         preset: str | None = "paper",
         *,
         config: PairFlockConfig | None = None,
+        interface: str = UNSET,
+        interface_params: Mapping[str, Any] | None = UNSET,
         render_mode: str | None = None,
-        seed: int | None = None,
+        seed: Any = None,
+        frame: str = UNSET,
+        frame_params: Mapping[str, Any] | None = UNSET,
         **overrides: Any,
     ) -> None:
-        if render_mode is not None and render_mode not in RENDER_MODES:
-            raise ValueError(
-                f"render_mode={render_mode!r} is invalid: must be None or one of {RENDER_MODES}"
-            )
-        if config is None:
-            config = make_config(preset, **overrides)
-        elif overrides:
-            config = config.replace(**overrides)
-        self.core = PairFlockCore(config, num_envs=1, seed=seed)
-        self.config = self.core.config
+        name, params = resolve_interface_args(
+            interface, interface_params, frame, frame_params, "world"
+        )
+        self.core, self.interface = build_core_and_interface(
+            preset, config, overrides, 1, seed, name, params, render_mode
+        )
+        self.interface_name = name
+        self.config = cfg = self.core.config
         self.layout = self.core.layout
+        self.state_layout = StateLayout(cfg.n_uavs, cfg.dim)
         self.render_mode = render_mode
         self.possible_agents = [agent_name(i) for i in self.core.agent_uavs]
         self.agents: list[str] = []
         self._agent_index = {a: m for m, a in enumerate(self.possible_agents)}
-        obs_space = spaces.Box(-np.inf, np.inf, (self.layout.size,), np.float32)
-        act_space = spaces.Box(-1.0, 1.0, (self.config.dim,), np.float32)
-        self.observation_spaces = dict.fromkeys(self.possible_agents, obs_space)
-        self.action_spaces = dict.fromkeys(self.possible_agents, act_space)
+        self.partners = {
+            agent_name(int(a)): agent_name(int(b))
+            for a, b in zip(self.core.agent_uavs, self.core.partner_uavs, strict=True)
+        }
+        low, high = self.interface.observation_bounds()
         # distinct objects per agent so that seeding one agent's space does not seed another's
-        for a in self.possible_agents[1:]:
-            self.observation_spaces[a] = spaces.Box(
-                -np.inf, np.inf, (self.layout.size,), np.float32
-            )
-            self.action_spaces[a] = spaces.Box(-1.0, 1.0, (self.config.dim,), np.float32)
-        self._renderer: SwarmRenderer | None = None
-        self._last_info: list[dict[str, Any]] | None = None
+        self.observation_spaces = {
+            a: spaces.Box(low, high, dtype=np.float32) for a in self.possible_agents
+        }
+        self.action_spaces = {
+            a: spaces.Box(-1.0, 1.0, (cfg.dim,), np.float32) for a in self.possible_agents
+        }
+        self.state_space = spaces.Box(*state_bounds(cfg), dtype=np.float32)
+        self.physical_obs: np.ndarray | None = None
+        self._frames = SwarmFrames(self.core, render_mode)
+        self._title: str | None = None
 
     # PettingZoo requires the same object on every call
     def observation_space(self, agent: str) -> spaces.Box:
@@ -163,19 +207,41 @@ class PairFlockParallelEnv(ParallelEnv):
 
     @property
     def num_envs(self) -> int:
+        """1: one swarm (the batched views are the Gymnasium vector and SB3 envs)."""
         return 1
 
+    num_swarms = num_envs
+
+    @property
+    def reward_range(self) -> tuple[float, float]:
+        """Every per-agent reward lies in this range (the interface's)."""
+        return self.interface.reward_range
+
+    @property
+    def frame(self) -> str:
+        """Deprecated name of :attr:`interface_name`."""
+        warnings.warn("frame is deprecated; use interface_name", DeprecationWarning, stacklevel=2)
+        return self.interface_name
+
     # ------------------------------------------------------------------ API
-    def reset(self, seed: int | None = None, options: Mapping[str, Any] | None = None):
+    def reset(self, seed: Any = None, options: Mapping[str, Any] | None = None):
+        """Start an episode; ``seed`` (None, an int >= 0 or a SeedSequence) reseeds the swarm's
+        generator, ``options`` may set ``positions`` / ``velocities`` (n_uavs, dim)."""
+        self._check_open("reset")
+        seed = check_seed(seed)
         res = self.core.reset(seed=None if seed is None else [seed], options=options)
         self.agents = list(self.possible_agents)
-        if self._renderer is not None:
-            self._renderer.reset()
-        obs = {a: res.obs[0, m] for m, a in enumerate(self.possible_agents)}
-        infos = self._infos(res.info)
-        if self.render_mode == "human":
-            self.render()
-        return obs, infos
+        self._frames.reset()
+        return self._emit(res.obs), self._infos(res.info)
+
+    def check_action(self, agent: Any, action: Any) -> np.ndarray:
+        """``action`` of the live agent ``agent`` as float64 (dim,); ValueError/TypeError
+        naming the agent otherwise (nothing changes)."""
+        if agent not in self._agent_index:
+            raise ValueError(f"unknown agent {agent!r}; agents are {self.possible_agents}")
+        if agent not in self.agents:
+            raise RuntimeError(f"agent {agent!r} is done; call reset()")
+        return check_policy_actions(action, (self.config.dim,), f"action of {agent}")
 
     def _check_action_dict(self, actions: Any) -> np.ndarray:
         if not isinstance(actions, Mapping):
@@ -190,22 +256,22 @@ class PairFlockParallelEnv(ParallelEnv):
         missing = [a for a in self.agents if a not in actions]
         if missing:
             raise ValueError(f"missing action for agent(s) {missing}; every live agent must act")
-        D = self.config.dim
-        out = np.empty((1, len(self.possible_agents), D))
+        out = np.empty((1, len(self.possible_agents), self.config.dim))
         for a, m in self._agent_index.items():
-            act = real_array(actions[a], f"action of {a}", (D,))
-            out[0, m] = act
+            out[0, m] = self.check_action(a, actions[a])
         return out
 
     def step(self, actions: Mapping[str, Any]):
+        """One step (one policy decision of ``decision_period`` control steps with
+        ``interface="pair"``) of every agent; returns PettingZoo's five dicts."""
+        self._check_open("step")
         if not self.agents:
             raise RuntimeError("the episode has ended (or reset() was never called); call reset()")
         a = self._check_action_dict(actions)
-        res = self.core.step(a)
+        res = held_step(self.core, self.interface, self.physical_obs[None], a)
         agents = self.possible_agents
-        obs = {ag: res.obs[0, m] for m, ag in enumerate(agents)}
-        r = res.reward[0].tolist()
-        rewards = dict(zip(agents, r, strict=False))
+        obs = self._emit(res.obs)
+        rewards = dict(zip(agents, res.reward[0].tolist(), strict=True))
         term = bool(res.terminated[0])
         trunc = bool(res.truncated[0])
         terminations = dict.fromkeys(agents, term)
@@ -217,6 +283,12 @@ class PairFlockParallelEnv(ParallelEnv):
             self.render()
         return obs, rewards, terminations, truncations, infos
 
+    def _emit(self, phys: np.ndarray):
+        """Observations of swarm 0 by agent; keeps the physical observation."""
+        self.physical_obs = phys[0]
+        enc = self.interface.encode(phys[0])
+        return {a: enc[m] for m, a in enumerate(self.possible_agents)}
+
     def _infos(self, info: dict[str, np.ndarray]) -> dict[str, dict[str, Any]]:
         # (B,) arrays are swarm-level, (B, M) arrays per agent, (B, ...) anything else
         swarm = {k: v[0].item() for k, v in info.items() if v.ndim == 1}
@@ -226,36 +298,32 @@ class PairFlockParallelEnv(ParallelEnv):
             d = {k: v[m] for k, v in per_agent.items()}
             d.update(swarm)
             d["uav_index"] = int(self.core.agent_uavs[m])
-            d["partner"] = agent_name(int(self.core.partner_uavs[m]))
+            d["partner_index"] = int(self.core.partner_uavs[m])
             out[a] = d
-        self._last_info = list(out.values())
+        first = out[self.possible_agents[0]]
+        self._title = (
+            f"t = {first['sim_time']:.2f} s   pair distance = {first['pair_distance']:.2f} m"
+        )
         return out
 
-    def render(self):
-        if self.render_mode is None:
-            import warnings
+    def state(self) -> np.ndarray:
+        """The global state now (``state_layout``), float32 in ``state_space`` (the state of a
+        diverged swarm, whose episode has ended, is clipped into it)."""
+        if self.physical_obs is None:
+            raise RuntimeError("call reset() before state()")
+        c = self.core
+        lq, lp = c.leader_state()
+        s = global_state(self.config, c.q[0], c.p[0], lq[0], lp[0], c.t[0])
+        return np.clip(np.nan_to_num(s), self.state_space.low, self.state_space.high)
 
-            warnings.warn(
-                "render() called without a render_mode; pass render_mode=...", stacklevel=2
-            )
-            return None
-        if self._renderer is None:
-            self._renderer = SwarmRenderer(self.config.pairs, self.config.d_m, self.render_mode)
-        core = self.core
-        lq, _ = core.leader_state()
-        info = self._last_info[0] if self._last_info else None
-        title = None
-        if info is not None:
-            title = f"t = {info['sim_time']:.2f} s   pair distance = {info['pair_distance']:.2f} m"
-        if self.render_mode == "rgb_array":
-            return self._renderer.rgb_array(core.q[0], core.p[0], lq[0], title)
-        self._renderer.human(core.q[0], core.p[0], lq[0], title)
-        return None
+    def render(self):
+        """The swarm as an RGB array (``render_mode="rgb_array"``) or in a window."""
+        return self._frames.render(0, self._title)
 
     def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+        """Release the renderer; the env cannot be reset or stepped afterwards."""
+        self._frames.close()
+        self._mark_closed()
 
 
 def parallel_env(**kwargs: Any) -> PairFlockParallelEnv:
@@ -264,8 +332,11 @@ def parallel_env(**kwargs: Any) -> PairFlockParallelEnv:
 
 
 def raw_env(**kwargs: Any):
-    """The AEC env built from the parallel env by PettingZoo's converter (order enforced)."""
-    return parallel_to_aec(parallel_env(**kwargs))
+    """The AEC env over the parallel env (order enforced; see
+    :class:`~pairflock_env.envs.aec.PairFlockAECEnv`)."""
+    from .aec import PairFlockAECEnv, PairFlockOrderEnforcing
+
+    return PairFlockOrderEnforcing(PairFlockAECEnv(parallel_env(**kwargs)))
 
 
 def env(**kwargs: Any):

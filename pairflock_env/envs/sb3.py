@@ -1,11 +1,14 @@
 """Native stable-baselines3 VecEnv: one row per paired UAV of B swarms, one batched core.
 
-Imports stable-baselines3, so it is loaded lazily (``pairflock_env.envs.PairFlockVecEnv`` or
-``from pairflock_env.envs.sb3 import PairFlockVecEnv``); ``import pairflock_env`` stays light.
+Imports stable-baselines3, so it is loaded lazily (``pairflock_env.envs.PairFlockSB3VecEnv`` or
+``from pairflock_env.envs.sb3 import PairFlockSB3VecEnv``); ``import pairflock_env`` stays light.
+``PairFlockVecEnv`` is its deprecated former name.
 """
 
 from __future__ import annotations
 
+import copy
+import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -21,16 +24,28 @@ except ImportError as e:  # pragma: no cover - depends on the install
 
 from ..config import PairFlockConfig
 from ..core import AGENT_INFO_KEYS, SWARM_INFO_KEYS
-from ._learning_view import (
+from ..seeding import offset_seeds
+from ._common import (
     RENDER_MODES,
+    UNSET,
     SwarmFrames,
+    ViewLifecycle,
     build_core_and_interface,
     check_policy_actions,
+    check_reset_options,
+    deprecated_attr,
     held_step,
+    resolve_interface_args,
 )
 from .parallel import agent_name
 
-__all__ = ["AgentRow", "PairFlockVecEnv"]
+__all__ = ["AgentRow", "PairFlockSB3VecEnv"]
+
+_DEPRECATED = {"PairFlockVecEnv": "PairFlockSB3VecEnv"}
+
+
+def __getattr__(name: str) -> Any:
+    return deprecated_attr(__name__, name, _DEPRECATED, globals())
 
 
 class AgentRow:
@@ -63,14 +78,14 @@ class AgentRow:
         }
     )
 
-    def __init__(self, venv: PairFlockVecEnv, index: int) -> None:
+    def __init__(self, venv: PairFlockSB3VecEnv, index: int) -> None:
         object.__setattr__(self, "_venv", venv)
         object.__setattr__(self, "index", index)
 
     def __setattr__(self, name: str, value: Any) -> None:
         if name in self._READ_ONLY:
             raise AttributeError(
-                f"attribute {name!r} of a PairFlockVecEnv row is read-only; settable are any "
+                f"attribute {name!r} of a PairFlockSB3VecEnv row is read-only; settable are any "
                 f"other names (stored per row), read-only are {sorted(self._READ_ONLY)}"
             )
         object.__setattr__(self, name, value)
@@ -154,13 +169,16 @@ class AgentRow:
         return f"AgentRow(index={self.index}, swarm={self.swarm}, agent={self.agent!r})"
 
 
-class PairFlockVecEnv(VecEnv):
-    """SB3 ``VecEnv`` over one :class:`~pairflock_env.core.PairFlockCore` of ``num_swarms``
-    swarms, with parameter sharing: row ``b * M + m`` is paired UAV m of swarm b
-    (M = 2 x pairs), so one policy drives every paired UAV. ``num_envs = num_swarms * M``.
+class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
+    """SB3 ``VecEnv`` with one row per paired UAV, over one
+    :class:`~pairflock_env.core.PairFlockCore` of ``num_swarms`` swarms, with parameter
+    sharing: row ``b * M + m`` is paired UAV m of swarm b (M = 2 x pairs, ``agents_per_swarm``),
+    so one policy drives every paired UAV. ``num_envs`` (SB3's name) = ``num_rows`` =
+    ``num_swarms * M``. (Formerly ``PairFlockVecEnv``, a deprecated alias.)
 
-    Observation/action/reward of a row are those of the learning interface ``frame``
-    (:mod:`pairflock_env.learning`; ``"pair"`` by default, ``"world"`` for the raw env). One
+    Observation/action/reward of a row are those of the learning interface ``interface``
+    (:mod:`pairflock_env.learning`; ``"pair"`` by default, ``"world"`` for the raw env;
+    parameters in ``interface_params``; ``frame`` / ``frame_params`` are deprecated aliases). One
     step is one policy decision: the action is held for the interface's ``decision_period``
     control steps and the reward is their mean.
 
@@ -172,15 +190,18 @@ class PairFlockVecEnv(VecEnv):
       stores each row's last observation in ``infos[i]["terminal_observation"]`` and is reset
       at once (without a seed: its generator continues); the returned observation is the
       first of the new episode.
-    * ``seed(s)`` gives swarm b the seed ``s + b`` at the next ``reset()`` (its rows all
-      report that seed), so swarm b equals ``parallel_env().reset(seed=s + b)``; ``seed()``
-      with no argument draws a fresh seed from OS entropy (no global RNG).
-      ``set_options({"positions": ..., "velocities": ...})`` likewise applies at the next reset.
+    * ``seed(s)`` gives swarm b the seed ``s + b`` (a SeedSequence: its child b) at the next
+      ``reset()`` (its rows all report that seed), so swarm b equals
+      ``parallel_env().reset(seed=s + b)``; ``seed()`` with no argument draws a fresh seed
+      from OS entropy (no global RNG). ``set_options({"positions": ..., "velocities": ...})``
+      likewise applies at the next reset; every swarm's options are checked before any swarm
+      is reset.
     * ``get_attr`` / ``set_attr`` / ``env_method`` address :class:`AgentRow` objects.
     * ``info_keys``: per-step core quantities copied into every row's info (names from
       ``AGENT_INFO_KEYS`` / ``SWARM_INFO_KEYS`` or ``"all"``); none by default, for speed.
 
-    Invalid actions (wrong shape, non-numeric, NaN/inf) raise and leave the env unchanged.
+    Invalid actions (wrong shape, non-numeric, NaN/inf) raise and leave the env unchanged;
+    ``reset``/``step`` after ``close`` raise ``RuntimeError`` (``docs/bad-input.md``).
     """
 
     def __init__(
@@ -190,18 +211,23 @@ class PairFlockVecEnv(VecEnv):
         config: PairFlockConfig | None = None,
         num_swarms: int = 1,
         seed: Any = None,
-        frame: str = "pair",
-        frame_params: Mapping[str, Any] | None = None,
+        interface: str = UNSET,
+        interface_params: Mapping[str, Any] | None = UNSET,
         render_mode: str | None = None,
         info_keys: Iterable[str] | str = (),
+        frame: str = UNSET,
+        frame_params: Mapping[str, Any] | None = UNSET,
         **overrides: Any,
     ) -> None:
-        self.core, self.interface = build_core_and_interface(
-            preset, config, overrides, num_swarms, seed, frame, frame_params, render_mode
+        name, params = resolve_interface_args(
+            interface, interface_params, frame, frame_params, "pair"
         )
+        self.core, self.interface = build_core_and_interface(
+            preset, config, overrides, num_swarms, seed, name, params, render_mode
+        )
+        self.interface_name = name
         self.config = self.core.config
         self.layout = self.core.layout
-        self.frame = frame
         self.num_swarms = self.core.num_envs
         self.agents_per_swarm = M = self.core.n_agents
         valid = AGENT_INFO_KEYS + SWARM_INFO_KEYS
@@ -215,26 +241,49 @@ class PairFlockVecEnv(VecEnv):
             raise ValueError(f"info_keys {bad} are invalid: valid keys are {list(valid)}")
         self.info_keys = info_keys
         self.render_mode = render_mode
-        n_rows = self.num_swarms * M
+        self.num_rows = n_rows = self.num_swarms * M
         self._rows = [AgentRow(self, i) for i in range(n_rows)]
         self._frames = SwarmFrames(self.core, render_mode)
-        bound = self.interface.observation_bound
-        obs_space = spaces.Box(-bound, bound, (self.interface.observation_size,), np.float32)
+        obs_space = spaces.Box(*self.interface.observation_bounds(), dtype=np.float32)
         act_space = spaces.Box(-1.0, 1.0, (self.config.dim,), np.float32)
         super().__init__(n_rows, obs_space, act_space)
         self.physical_obs: np.ndarray | None = None  # (B, M, obs_size)
         self._actions: np.ndarray | None = None
         self._was_reset = False
 
+    @property
+    def reward_range(self) -> tuple[float, float]:
+        """Every row's reward lies in this range (the interface's)."""
+        return self.interface.reward_range
+
+    @property
+    def frame(self) -> str:
+        """Deprecated name of :attr:`interface_name`."""
+        warnings.warn("frame is deprecated; use interface_name", DeprecationWarning, stacklevel=2)
+        return self.interface_name
+
     # ------------------------------------------------------------------ seeding/reset
-    def seed(self, seed: int | None = None) -> Sequence[int | None]:
+    def seed(self, seed: Any = None) -> Sequence[Any]:
+        """Seeds for the next ``reset()``: swarm b gets ``seed + b`` (a SeedSequence: its
+        child b; a list: one seed per swarm); ``None`` draws a fresh int seed from OS entropy.
+        Returns one seed per row."""
         if seed is None:
             seed = int(np.random.SeedSequence().generate_state(1)[0])
-        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-            raise ValueError(f"seed={seed!r} is invalid: must be None or an int >= 0")
+        per_swarm = offset_seeds(seed, self.num_swarms)
         M = self.agents_per_swarm
-        self._seeds = [int(seed) + i // M for i in range(self.num_envs)]
+        self._seeds = [per_swarm[i // M] for i in range(self.num_envs)]
         return list(self._seeds)
+
+    def set_options(self, options: dict | list[dict | None] | None = None) -> None:
+        """Options for the next ``reset()``: one dict for every row or a list of ``num_envs``
+        (SB3's convention); checked now (TypeError/ValueError naming the row)."""
+        rows = options if isinstance(options, list) else [options] * self.num_envs
+        if len(rows) != self.num_envs:
+            raise ValueError(f"options has {len(rows)} entries, expected {self.num_envs} (rows)")
+        N, D = self.config.n_uavs, self.config.dim
+        for i, o in enumerate(rows):
+            check_reset_options(o, N, D, f"options of row {i}")
+        super().set_options(options)
 
     def _per_swarm(self, values: list[Any], what: str) -> list[Any]:
         M = self.agents_per_swarm
@@ -255,8 +304,13 @@ class PairFlockVecEnv(VecEnv):
         return out
 
     def reset(self):
+        """Reset every swarm with the pending seeds and options; returns the observations."""
+        self._check_open("reset")
         seeds = self._per_swarm(list(self._seeds), "seeds")
         options = self._per_swarm(list(self._options), "options")
+        N, D = self.config.n_uavs, self.config.dim
+        for b, o in enumerate(options):  # every swarm's options before the first reset
+            check_reset_options(o or None, N, D, f"options of swarm {b}")
         all_rows = np.arange(self.num_swarms)
         if all(not o for o in options):
             res = self.core.reset_rows(
@@ -277,9 +331,13 @@ class PairFlockVecEnv(VecEnv):
 
     # ------------------------------------------------------------------ step
     def step_async(self, actions: np.ndarray) -> None:
+        """Validate and store the actions (num_envs, dim) of the next ``step_wait``."""
+        self._check_open("step")
         self._actions = check_policy_actions(actions, (self.num_envs, self.config.dim))
 
     def step_wait(self):
+        """One policy decision of every row, with SB3's auto-reset of ended swarms."""
+        self._check_open("step")
         if not self._was_reset:
             raise RuntimeError("call reset() before step()")
         if self._actions is None:
@@ -336,8 +394,6 @@ class PairFlockVecEnv(VecEnv):
         """A deep copy of everything that determines the following steps (the core's state and
         per-swarm generators, the last physical observation, pending seeds/options); with
         :meth:`set_state` it makes a checkpointed run continue exactly."""
-        import copy
-
         return {
             "config": self.config.to_dict(),
             "core": copy.deepcopy(self.core),
@@ -349,10 +405,8 @@ class PairFlockVecEnv(VecEnv):
 
     def set_state(self, state: Mapping[str, Any]) -> None:
         """Restore a :meth:`get_state` snapshot taken from an env with the same config and size."""
-        import copy
-
         if not isinstance(state, Mapping) or "core" not in state:
-            raise TypeError("state must be a dict returned by PairFlockVecEnv.get_state()")
+            raise TypeError("state must be a dict returned by PairFlockSB3VecEnv.get_state()")
         if state["config"] != self.config.to_dict():
             raise ValueError("state was taken from an env with a different config")
         core = state["core"]
@@ -405,9 +459,8 @@ class PairFlockVecEnv(VecEnv):
         return [False for _ in self._get_indices(indices)]
 
     def get_images(self) -> Sequence[np.ndarray | None]:
+        """One frame per row (its swarm's), with ``render_mode="rgb_array"``."""
         if self.render_mode != "rgb_array":
-            import warnings
-
             warnings.warn(
                 f"The render mode is {self.render_mode}, but get_images() needs 'rgb_array'",
                 stacklevel=2,
@@ -417,7 +470,9 @@ class PairFlockVecEnv(VecEnv):
         return [frames[i // self.agents_per_swarm] for i in range(self.num_envs)]
 
     def close(self) -> None:
+        """Release the renderers; the env cannot be reset or stepped afterwards."""
         self._frames.close()
+        self._mark_closed()
 
 
 def _same_options(a: Mapping[str, Any], b: Mapping[str, Any]) -> bool:

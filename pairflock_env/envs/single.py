@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -10,12 +11,16 @@ import numpy as np
 from gymnasium import spaces
 
 from ..config import PairFlockConfig
-from ._learning_view import (
+from ..seeding import check_seed
+from ._common import (
     RENDER_MODES,
+    UNSET,
     SwarmFrames,
+    ViewLifecycle,
     build_core_and_interface,
     check_policy_actions,
     held_step,
+    resolve_interface_args,
 )
 
 __all__ = ["ENV_ID", "PairFlockGymEnv"]
@@ -23,7 +28,7 @@ __all__ = ["ENV_ID", "PairFlockGymEnv"]
 ENV_ID = "pairflock/PairFlock-v0"
 
 
-class PairFlockGymEnv(gym.Env):
+class PairFlockGymEnv(ViewLifecycle, gym.Env):
     """One UAV swarm flocking with the protocol of eqs. 11-19; the agent controls the pair.
 
     ``gymnasium.make("pairflock/PairFlock-v0", n_uavs=20, pair_accel_limit=50.0)``. Every UAV
@@ -31,56 +36,61 @@ class PairFlockGymEnv(gym.Env):
     paired UAVs (for the default config: one pair, UAVs 0 and 1), the slot the paper's
     sliding-mode controller fills. ``gymnasium.make_vec(ENV_ID, num_envs=B,
     vectorization_mode="vector_entry_point")`` runs B swarms in one batched core
-    (:class:`~pairflock_env.envs.vector.PairFlockVectorEnv`); the SB3 VecEnv with one row per
-    paired UAV is :class:`~pairflock_env.envs.sb3.PairFlockVecEnv`.
+    (:class:`~pairflock_env.envs.vector.PairFlockGymVectorEnv`); the SB3 VecEnv with one row
+    per paired UAV is :class:`~pairflock_env.envs.sb3.PairFlockSB3VecEnv`.
 
     ## Action space
     ``Box(-1, 1, (M * dim,), float32)``, M = 2 x pairs: the concatenated actions of the paired
     UAVs A0, B0, A1, B1, ... (``action.reshape(M, dim)`` gives one row per UAV; flat so that
-    SB3's MLP policies take it as is). What a row means depends on ``frame`` (see
+    SB3's MLP policies take it as is). What a row means depends on ``interface`` (see
     :mod:`pairflock_env.learning`):
 
-    * ``frame="pair"`` (default): the UAV's acceleration in its pair frame (radial toward the
+    * ``interface="pair"`` (default): the UAV's acceleration in its pair frame (radial toward the
       partner, tangential), ``accel_scale`` m/s^2 per unit, on top of a feed-forward that
       cancels the observed flocking difference on the pair; the sum never exceeds
       ``pair_accel_limit`` per component.
-    * ``frame="world"``: the raw env action, world frame, units of ``pair_accel_limit``
+    * ``interface="world"``: the raw env action, world frame, units of ``pair_accel_limit``
       (clipped per component by the core).
 
     NaN/inf, a wrong shape or a non-numeric dtype raise and leave the env unchanged. One
     ``step`` is one policy decision: the action is held for the interface's
     ``decision_period`` control steps (5 x 0.01 s for ``"pair"``, 1 for ``"world"``; set it
-    with ``frame_params={"decision_period": k}``) and the reward is their mean.
+    with ``interface_params={"decision_period": k}``) and the reward is their mean.
 
     ## Observation space
-    ``Box(-b, b, (M * n,), float32)``: ``obs.reshape(M, n)[m]`` is what UAV m sees.
-    ``frame="pair"``: b = 5 and the normalised pair-frame features of
+    ``Box(low, high, (M * n,), float32)``: ``obs.reshape(M, n)[m]`` is what UAV m sees.
+    ``interface="pair"``: the normalised pair-frame features in [-5, 5] of
     :class:`~pairflock_env.learning.PairFrameInterface`
-    (``env.unwrapped.interface.fields``); ``frame="world"``: the physical observation of
-    :class:`~pairflock_env.observations.ObsLayout` (``env.unwrapped.layout``), b = inf. The
-    physical observation (M, obs_size) is always available as ``env.unwrapped.physical_obs``.
+    (``env.unwrapped.interface.fields``); ``interface="world"``: the physical observation of
+    :class:`~pairflock_env.observations.ObsLayout` (``env.unwrapped.layout``), with finite
+    bounds derived from the config (:mod:`pairflock_env.spaces`). The physical observation
+    (M, obs_size) is always available as ``env.unwrapped.physical_obs``.
 
     ## Rewards
     The mean over the M paired UAVs of the interface's per-UAV reward: the core's penalty sum
-    (``frame="world"``) or the pair frame's log-accuracy / effort / separation reward.
+    (``interface="world"``; metres of pair error per control step, about -250 at the paper's
+    start) or the pair frame's normalised log-accuracy / effort / separation reward (of order
+    one per step). ``env.unwrapped.reward_range`` is its guaranteed range.
 
     ## Starting state, episode end
     As the PettingZoo env (``pairflock_env.parallel_env``): pair members in opposite corners,
     the others uniform in [-50, 50]^dim at rest; truncation after ``config.episode_steps``
     control steps (50 s in the paper preset; ``max_cycles`` / ``horizon`` override it);
     termination on divergence (or on a collision with ``terminate_on_collision=True``).
-    ``step`` after the end raises; call ``reset``.
+    ``step`` after the end or before ``reset``, ``render`` before ``reset`` and
+    ``reset``/``step`` after ``close`` raise ``RuntimeError``.
 
     ## Infos
     Per-agent quantities (``pair_error``, ``min_separation``, ...) as arrays (M,), swarm
     quantities (``sim_time``, ``collisions``, ...) as floats, plus ``reward_<term>``.
 
     ## Arguments
-    ``preset`` (default ``"paper"``), ``config`` (a ``PairFlockConfig``), ``frame``
-    (``"pair"`` or ``"world"``), ``frame_params`` (dict of
+    ``preset`` (default ``"paper"``), ``config`` (a ``PairFlockConfig``), ``interface``
+    (``"pair"`` or ``"world"``), ``interface_params`` (dict of
     :class:`~pairflock_env.learning.PairFrameParams` fields), ``render_mode``
     (``"rgb_array"`` / ``"human"``), ``seed`` (of the swarm generator when ``reset`` gets
-    none) and any ``PairFlockConfig`` field as a keyword.
+    none) and any ``PairFlockConfig`` field as a keyword. ``frame`` / ``frame_params`` are
+    deprecated aliases of ``interface`` / ``interface_params``.
 
     ## Example
     >>> import gymnasium as gym, pairflock_env
@@ -103,37 +113,51 @@ class PairFlockGymEnv(gym.Env):
         preset: str | None = "paper",
         *,
         config: PairFlockConfig | None = None,
-        frame: str = "pair",
-        frame_params: Mapping[str, Any] | None = None,
+        interface: str = UNSET,
+        interface_params: Mapping[str, Any] | None = UNSET,
         render_mode: str | None = None,
-        seed: int | None = None,
+        seed: Any = None,
+        frame: str = UNSET,
+        frame_params: Mapping[str, Any] | None = UNSET,
         **overrides: Any,
     ) -> None:
-        self.core, self.interface = build_core_and_interface(
-            preset, config, overrides, 1, seed, frame, frame_params, render_mode
+        name, params = resolve_interface_args(
+            interface, interface_params, frame, frame_params, "pair"
         )
+        self.core, self.interface = build_core_and_interface(
+            preset, config, overrides, 1, seed, name, params, render_mode
+        )
+        self.interface_name = name
         self.config = self.core.config
         self.layout = self.core.layout
-        self.frame = frame
         self.render_mode = render_mode
         M, D = self.core.n_agents, self.config.dim
-        n = self.interface.observation_size
-        bound = self.interface.observation_bound
-        self.observation_space = spaces.Box(-bound, bound, (M * n,), np.float32)
+        low, high = self.interface.observation_bounds()
+        self.observation_space = spaces.Box(np.tile(low, M), np.tile(high, M), dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, (M * D,), np.float32)
         self.physical_obs: np.ndarray | None = None
         self._live = False
         self._frames = SwarmFrames(self.core, render_mode)
 
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
-        if seed is not None and (
-            isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0
-        ):
-            raise ValueError(f"seed={seed!r} is invalid: must be None or an int >= 0")
-        res = self.core.reset(seed=None if seed is None else [int(seed)], options=options)
+    @property
+    def reward_range(self) -> tuple[float, float]:
+        """The reward (the mean over the paired UAVs) lies in the interface's range."""
+        return self.interface.reward_range
+
+    @property
+    def frame(self) -> str:
+        """Deprecated name of :attr:`interface_name`."""
+        warnings.warn("frame is deprecated; use interface_name", DeprecationWarning, stacklevel=2)
+        return self.interface_name
+
+    def reset(self, *, seed: Any = None, options: dict[str, Any] | None = None):
+        """Start an episode; ``seed``: None, an int >= 0 or a SeedSequence."""
+        self._check_open("reset")
+        seed = check_seed(seed)
+        res = self.core.reset(seed=None if seed is None else [seed], options=options)
         # the swarm's own generator is the env's np_random (one source of randomness)
         self._np_random = self.core.rngs[0]
-        self._np_random_seed = -1 if seed is None else int(seed)
+        self._np_random_seed = seed if isinstance(seed, int) else -1
         self._live = True
         self._frames.reset()
         self.physical_obs = res.obs[0]
@@ -143,6 +167,8 @@ class PairFlockGymEnv(gym.Env):
         return obs, self._info(res.info)
 
     def step(self, action: Any):
+        """One policy decision (``decision_period`` control steps)."""
+        self._check_open("step")
         if not self._live:
             raise RuntimeError("the episode has ended (or reset() was never called); call reset()")
         M, D = self.core.n_agents, self.config.dim
@@ -166,7 +192,10 @@ class PairFlockGymEnv(gym.Env):
         return out
 
     def render(self):
+        """The swarm as an RGB array (``render_mode="rgb_array"``) or in a window."""
         return self._frames.render(0)
 
     def close(self) -> None:
+        """Release the renderer; the env cannot be reset or stepped afterwards."""
         self._frames.close()
+        self._mark_closed()

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import warnings
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -11,25 +12,39 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from ..config import PairFlockConfig
-from ._learning_view import (
+from ..seeding import offset_seeds
+from ._common import (
     RENDER_MODES,
+    UNSET,
     SwarmFrames,
+    ViewLifecycle,
     build_core_and_interface,
     check_policy_actions,
+    deprecated_attr,
     held_step,
+    resolve_interface_args,
 )
 
-__all__ = ["PairFlockVectorEnv"]
+__all__ = ["PairFlockGymVectorEnv"]
+
+_DEPRECATED = {"PairFlockVectorEnv": "PairFlockGymVectorEnv"}
 
 
-class PairFlockVectorEnv(VectorEnv):
-    """B independent swarms, each exactly :class:`~pairflock_env.envs.single.PairFlockGymEnv`,
-    simulated side by side in one :class:`~pairflock_env.core.PairFlockCore`.
+def __getattr__(name: str) -> Any:
+    return deprecated_attr(__name__, name, _DEPRECATED, globals())
+
+
+class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
+    """Gymnasium ``VectorEnv`` with one row per swarm: B independent swarms, each exactly
+    :class:`~pairflock_env.envs.single.PairFlockGymEnv`, simulated side by side in one
+    :class:`~pairflock_env.core.PairFlockCore`. ``num_envs`` (Gymnasium's name) =
+    ``num_swarms`` = ``num_rows`` = B. (Formerly ``PairFlockVectorEnv``, a deprecated alias.)
 
     ``gymnasium.make_vec("pairflock/PairFlock-v0", num_envs=B,
     vectorization_mode="vector_entry_point", **kwargs)`` builds it; ``kwargs`` are those of
     the single env. Sub-env b equals a single env reset with the same seed: ``reset(seed=s)``
-    seeds sub-env b with ``s + b`` (as ``SyncVectorEnv``), a list gives one seed each.
+    seeds sub-env b with ``s + b`` (as ``SyncVectorEnv``), a SeedSequence with its child b,
+    a list gives one seed each (:mod:`pairflock_env.seeding`).
 
     Observations ``(B, M * n)``, actions ``(B, M * dim)`` (row b is sub-env b's flat
     observation / action, as in the single env), rewards / terminations /
@@ -52,13 +67,18 @@ class PairFlockVectorEnv(VectorEnv):
         preset: str | None = "paper",
         *,
         config: PairFlockConfig | None = None,
-        frame: str = "pair",
-        frame_params: Mapping[str, Any] | None = None,
+        interface: str = UNSET,
+        interface_params: Mapping[str, Any] | None = UNSET,
         render_mode: str | None = None,
-        seed: int | None = None,
+        seed: Any = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+        frame: str = UNSET,
+        frame_params: Mapping[str, Any] | None = UNSET,
         **overrides: Any,
     ) -> None:
+        name, params = resolve_interface_args(
+            interface, interface_params, frame, frame_params, "pair"
+        )
         try:
             mode = AutoresetMode(autoreset_mode)
         except ValueError:
@@ -67,12 +87,13 @@ class PairFlockVectorEnv(VectorEnv):
                 f"{[m.value for m in AutoresetMode]}"
             ) from None
         self.core, self.interface = build_core_and_interface(
-            preset, config, overrides, num_envs, seed, frame, frame_params, render_mode
+            preset, config, overrides, num_envs, seed, name, params, render_mode
         )
+        self.interface_name = name
         self.num_envs = self.core.num_envs
+        self.num_swarms = self.num_rows = self.num_envs
         self.config = self.core.config
         self.layout = self.core.layout
-        self.frame = frame
         self.render_mode = render_mode
         self.autoreset_mode = mode
         self.metadata = {
@@ -81,9 +102,10 @@ class PairFlockVectorEnv(VectorEnv):
             "autoreset_mode": mode,
         }
         M, D = self.core.n_agents, self.config.dim
-        n = self.interface.observation_size
-        bound = self.interface.observation_bound
-        self.single_observation_space = spaces.Box(-bound, bound, (M * n,), np.float32)
+        low, high = self.interface.observation_bounds()
+        self.single_observation_space = spaces.Box(
+            np.tile(low, M), np.tile(high, M), dtype=np.float32
+        )
         self.single_action_space = spaces.Box(-1.0, 1.0, (M * D,), np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
@@ -92,23 +114,24 @@ class PairFlockVectorEnv(VectorEnv):
         self._was_reset = False
         self._frames = SwarmFrames(self.core, render_mode)
 
-    # ------------------------------------------------------------------ reset
-    def _swarm_seeds(self, seed: Any, n: int) -> list[int | None] | None:
-        if seed is None:
-            return None
-        if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-            if seed < 0:
-                raise ValueError(f"seed={seed!r} is invalid: must be >= 0")
-            return [int(seed) + i for i in range(n)]
-        if isinstance(seed, Sequence) and not isinstance(seed, str):
-            if len(seed) != n:
-                raise ValueError(f"seed has {len(seed)} entries, expected {n} (one per sub-env)")
-            return list(seed)
-        raise TypeError(
-            f"seed={seed!r} is invalid: must be None, an int >= 0 or a list of {n} seeds"
-        )
+    @property
+    def reward_range(self) -> tuple[float, float]:
+        """Every reward (the mean over a swarm's paired UAVs) lies in this range."""
+        return self.interface.reward_range
 
+    @property
+    def frame(self) -> str:
+        """Deprecated name of :attr:`interface_name`."""
+        warnings.warn("frame is deprecated; use interface_name", DeprecationWarning, stacklevel=2)
+        return self.interface_name
+
+    # ------------------------------------------------------------------ reset
     def reset(self, *, seed: Any = None, options: dict[str, Any] | None = None):
+        """Reset every sub-env, or those of ``options["reset_mask"]``; ``seed`` as in the
+        class docstring, ``options`` may also set ``positions`` / ``velocities``."""
+        self._check_open("reset")
+        if options is not None and not isinstance(options, Mapping):
+            raise TypeError(f"options={options!r} is invalid: must be a dict or None")
         rows = np.arange(self.num_envs)
         opts = dict(options) if options else {}
         if "reset_mask" in opts:
@@ -121,7 +144,7 @@ class PairFlockVectorEnv(VectorEnv):
                     f"True entry, got {mask.tolist()}"
                 )
             rows = np.flatnonzero(mask)
-        seeds = self._swarm_seeds(seed, self.num_envs)
+        seeds = offset_seeds(seed, self.num_envs)
         if seeds is not None and len(rows) < self.num_envs:
             seeds = [seeds[r] for r in rows]
         res = self.core.reset_rows(rows, seed=seeds, options=opts or None)
@@ -136,6 +159,8 @@ class PairFlockVectorEnv(VectorEnv):
 
     # ------------------------------------------------------------------ step
     def step(self, actions: Any):
+        """One policy decision of every sub-env, with the auto-reset of ``autoreset_mode``."""
+        self._check_open("step")
         if not self._was_reset:
             raise RuntimeError("call reset() before step()")
         B, M, D = self.num_envs, self.core.n_agents, self.config.dim
@@ -213,10 +238,13 @@ class PairFlockVectorEnv(VectorEnv):
 
     # ------------------------------------------------------------------ misc
     def render(self) -> tuple[Any, ...] | None:
+        """One frame per sub-env (``render_mode="rgb_array"``), or the windows (``"human"``)."""
         if self.render_mode is None:
             return self._frames.render(0)  # warns
         frames = tuple(self._frames.render(b) for b in range(self.num_envs))
         return frames if self.render_mode == "rgb_array" else None
 
     def close_extras(self, **kwargs: Any) -> None:
+        """Release the renderers; the env cannot be reset or stepped afterwards."""
         self._frames.close()
+        self._mark_closed()

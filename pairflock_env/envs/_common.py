@@ -1,0 +1,277 @@
+"""What every view (PettingZoo, Gymnasium Env and VectorEnv, SB3 VecEnv) shares: building the
+core and the learning interface from keyword arguments, the ``interface=`` keyword and its
+deprecated ``frame=`` alias, validating actions and reset options, holding a policy action
+for a decision period, rendering one swarm, and the closed-env guard. No physics here."""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from ..config import PairFlockConfig
+from ..core import PairFlockCore, real_array
+from ..decision import DecisionHold
+from ..learning import INTERFACES, LearningInterface, make_interface
+
+__all__ = [
+    "RENDER_MODES",
+    "UNSET",
+    "HeldStep",
+    "SwarmFrames",
+    "ViewLifecycle",
+    "build_core_and_interface",
+    "check_policy_actions",
+    "check_render_mode",
+    "check_reset_options",
+    "deprecated_attr",
+    "held_step",
+    "resolve_interface_args",
+]
+
+RENDER_MODES = ("rgb_array", "human")
+#: marks a keyword the caller did not pass (so that a deprecated alias can be told apart)
+UNSET: Any = object()
+
+
+def check_render_mode(render_mode: Any) -> str | None:
+    if render_mode is not None and render_mode not in RENDER_MODES:
+        raise ValueError(
+            f"render_mode={render_mode!r} is invalid: must be None or one of {RENDER_MODES}"
+        )
+    return render_mode
+
+
+def resolve_interface_args(
+    interface: Any, interface_params: Any, frame: Any, frame_params: Any, default: str
+) -> tuple[str, dict[str, Any]]:
+    """The learning interface's name and parameters from a view's keywords.
+
+    ``frame`` / ``frame_params`` are the deprecated names of ``interface`` /
+    ``interface_params`` (DeprecationWarning); passing a name and its alias is a TypeError.
+    """
+    given = {"interface": "interface", "interface_params": "interface_params"}
+    for new, old, old_value in (
+        ("interface", "frame", frame),
+        ("interface_params", "frame_params", frame_params),
+    ):
+        if old_value is UNSET:
+            continue
+        warnings.warn(f"{old}= is deprecated; use {new}=", DeprecationWarning, stacklevel=3)
+        if (interface if new == "interface" else interface_params) is not UNSET:
+            raise TypeError(f"pass {new}= or its deprecated alias {old}=, not both")
+        given[new] = old  # errors name the keyword the caller used
+        if new == "interface":
+            interface = old_value
+        else:
+            interface_params = old_value
+    name = default if interface is UNSET else interface
+    if not isinstance(name, str) or name not in INTERFACES:
+        raise ValueError(
+            f"{given['interface']}={name!r} is invalid: must be one of {list(INTERFACES)}"
+        )
+    params = None if interface_params is UNSET else interface_params
+    if params is not None and not isinstance(params, Mapping):
+        raise TypeError(
+            f"{given['interface_params']}={params!r} is invalid: must be a dict or None"
+        )
+    return name, dict(params or {})
+
+
+def build_core_and_interface(
+    preset: str | None,
+    config: PairFlockConfig | None,
+    overrides: Mapping[str, Any],
+    num_swarms: int,
+    seed: Any,
+    interface: str,
+    interface_params: Mapping[str, Any],
+    render_mode: str | None,
+) -> tuple[PairFlockCore, LearningInterface]:
+    """A validated core of ``num_swarms`` swarms and its learning interface.
+
+    The config is resolved in one place, the core's constructor (``config``, else ``preset``
+    plus the flat ``overrides``); ``interface`` / ``interface_params`` come from
+    :func:`resolve_interface_args`.
+    """
+    check_render_mode(render_mode)
+    if config is not None and not isinstance(config, PairFlockConfig):
+        raise TypeError(f"config={config!r} is invalid: must be a PairFlockConfig or None")
+    core = PairFlockCore(config, num_envs=num_swarms, seed=seed, preset=preset, **overrides)
+    return core, make_interface(interface, core.config, **interface_params)
+
+
+def check_policy_actions(actions: Any, shape: tuple[int, ...], name: str = "actions") -> np.ndarray:
+    """Policy actions as float64 of exactly ``shape``; TypeError/ValueError naming ``name``
+    otherwise (also for values that are finite but beyond float64's range)."""
+    out = real_array(actions, name, shape)
+    if not np.isfinite(out).all():  # e.g. np.longdouble("1e400"): finite, but inf as float64
+        bad = np.argwhere(~np.isfinite(out))[0].tolist()
+        raise ValueError(f"{name} is beyond float64's range (first at index {bad})")
+    return out
+
+
+def check_reset_options(options: Any, n_uavs: int, dim: int, name: str = "options") -> None:
+    """Raise TypeError/ValueError unless ``options`` is None or a dict whose ``positions`` /
+    ``velocities`` are finite (n_uavs, dim) arrays: what a one-swarm reset accepts.
+
+    For views that reset several swarms with different options in separate core calls, so
+    that every swarm's options are checked before the first swarm is reset.
+    """
+    if options is None:
+        return
+    if not isinstance(options, Mapping):
+        raise TypeError(f"{name}={options!r} is invalid: must be a dict or None")
+    for key in ("positions", "velocities"):
+        if options.get(key) is None:
+            continue
+        try:
+            arr = np.asarray(options[key], dtype=np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"{name}[{key!r}] must be a numeric array") from None
+        if arr.shape not in ((n_uavs, dim), (1, n_uavs, dim)):
+            raise ValueError(f"{name}[{key!r}] has shape {arr.shape}, expected ({n_uavs}, {dim})")
+        if not np.isfinite(arr).all():
+            raise ValueError(f"{name}[{key!r}] contains NaN or inf")
+
+
+@dataclasses.dataclass
+class HeldStep:
+    """One policy decision of every swarm (arrays with leading axis B)."""
+
+    obs: np.ndarray
+    """(B, M, obs_size) physical observation after the decision, or at the control step where
+    the swarm's episode ended."""
+    reward: np.ndarray
+    """(B, M) the interface's reward averaged over the control steps actually run."""
+    terminated: np.ndarray
+    truncated: np.ndarray
+    info: dict[str, np.ndarray]
+    """The core's infos at the same control step as ``obs``."""
+
+
+def held_step(
+    core: PairFlockCore, interface: LearningInterface, obs: np.ndarray, actions: np.ndarray
+) -> HeldStep:
+    """Apply policy actions (B, M, dim) for ``interface.decision_period`` control steps.
+
+    Each control step decodes the held policy action against the fresh physical observation
+    (:class:`~pairflock_env.decision.DecisionHold`) and steps the core. A swarm whose episode
+    ends part-way keeps its results from that step; while other swarms go on, it integrates
+    with no pair term until the view resets it (the core steps all swarms together). The
+    decision stops early once every swarm has ended, so a single swarm's state stays at the
+    step its episode ended.
+    """
+    B, M = actions.shape[:2]
+    k = interface.decision_period
+    hold = DecisionHold.decided(interface, actions)
+    if k == 1:
+        res = core.step(hold.env_action(obs))
+        r = interface.reward(res.reward, res.info, actions, res.obs)
+        return HeldStep(res.obs, r, res.terminated, res.truncated, res.info)
+    total = np.zeros((B, M))
+    count = np.zeros(B)
+    ended = np.zeros(B, bool)
+    terminated = np.zeros(B, bool)
+    truncated = np.zeros(B, bool)
+    out_obs = out_info = None
+    for _ in range(k):
+        env_a = hold.env_action(obs)
+        if ended.any():
+            env_a = np.where(ended[:, None, None], 0.0, env_a)
+        res = core.step(env_a)
+        live = ~ended
+        total[live] += interface.reward(res.reward, res.info, actions, res.obs)[live]
+        count[live] += 1
+        if out_obs is None:
+            out_obs = res.obs.copy()
+            out_info = {key: v.copy() for key, v in res.info.items()}
+        else:
+            out_obs[live] = res.obs[live]
+            for key, v in res.info.items():
+                out_info[key][live] = v[live]
+        now = live & (res.terminated | res.truncated)
+        terminated[now] = res.terminated[now]
+        truncated[now] = res.truncated[now]
+        ended |= now
+        if ended.all():
+            break
+        obs = res.obs
+    return HeldStep(out_obs, total / count[:, None], terminated, truncated, out_info)
+
+
+class SwarmFrames:
+    """The one render path of every view: lazily created renderers, one per swarm.
+
+    ``render(b)`` with ``render_mode=None`` warns and returns None (Gymnasium's convention);
+    before the first :meth:`reset` it raises ``RuntimeError`` (there is no swarm to draw yet).
+    """
+
+    def __init__(self, core: PairFlockCore, render_mode: str | None) -> None:
+        self.core = core
+        self.render_mode = render_mode
+        self._renderers: dict[int, Any] = {}
+        self._ready = False
+
+    def render(self, b: int, title: str | None = None):
+        if self.render_mode is None:
+            warnings.warn(
+                "render() called without a render_mode; pass render_mode=...", stacklevel=3
+            )
+            return None
+        if not self._ready:
+            raise RuntimeError("call reset() before render(): there is no swarm to draw yet")
+        from ..render import SwarmRenderer
+
+        r = self._renderers.get(b)
+        if r is None:
+            cfg = self.core.config
+            r = self._renderers[b] = SwarmRenderer(cfg.pairs, cfg.d_m, self.render_mode)
+        core = self.core
+        lq, _ = core.leader_state()
+        if title is None:
+            title = f"swarm {b}   t = {core.t[b]:.2f} s"
+        if self.render_mode == "rgb_array":
+            return r.rgb_array(core.q[b], core.p[b], lq[b], title)
+        r.human(core.q[b], core.p[b], lq[b], title)
+        return None
+
+    def reset(self, rows=None) -> None:
+        """Swarms ``rows`` (all when None) start a new episode: forget their headings."""
+        self._ready = True
+        for b, r in self._renderers.items():
+            if rows is None or b in rows:
+                r.reset()
+
+    def close(self) -> None:
+        for r in self._renderers.values():
+            r.close()
+        self._renderers.clear()
+
+
+class ViewLifecycle:
+    """Mixin: after ``close()`` the env refuses ``reset()`` / ``step()`` with a RuntimeError
+    (a closed env has released its windows and is not reused)."""
+
+    _closed = False
+
+    def _check_open(self, method: str) -> None:
+        if self._closed:
+            raise RuntimeError(f"{method}() called after close(); create a new env")
+
+    def _mark_closed(self) -> None:
+        self._closed = True
+
+
+def deprecated_attr(module: str, name: str, aliases: Mapping[str, str], namespace: dict) -> Any:
+    """Module ``__getattr__`` helper: old public names that still work, with a warning."""
+    if name in aliases:
+        new = aliases[name]
+        warnings.warn(
+            f"{module}.{name} is deprecated; use {module}.{new}", DeprecationWarning, stacklevel=3
+        )
+        return namespace[new]
+    raise AttributeError(f"module {module!r} has no attribute {name!r}")
