@@ -53,12 +53,6 @@ def test_torchrl_example():
     assert ns["rollout"]["uav", "observation"].shape[:2] == (10, 2)
 
 
-@pytest.mark.xfail(
-    strict=False,
-    reason="GymEnv passes frameskip= and retries without it only on a TypeError whose message "
-    "has Python's wording \"unexpected keyword argument 'frameskip'\": the config's unknown-"
-    "keyword error, changed on the config branch",
-)
 def test_torchrl_gymenv_example():
     pytest.importorskip("torchrl")
     ns = run_example("TorchRL", 1)

@@ -167,7 +167,10 @@ class Schema:
         hint = difflib.get_close_matches(str(key), names, n=3)
         extra = f" Did you mean {', '.join(map(repr, hint))}?" if hint else ""
         return UnknownFieldError(
-            f"unknown {self.label} {key!r}.{extra} Valid {self.label}s: {', '.join(names)}."
+            # Python's own wording first: wrappers (TorchRL's GymEnv) look for it to retry
+            # without an optional keyword such as frameskip
+            f"got an unexpected keyword argument {key!r}: unknown {self.label} {key!r}.{extra} "
+            f"Valid {self.label}s: {', '.join(names)}."
         )
 
     def resolve(self, values: Mapping[Any, Any], *, warn: bool) -> dict[str, Any]:
