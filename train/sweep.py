@@ -268,7 +268,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
         address=args.address,
         wall_s=round(wall, 2),
         skipped=done,
-        ran=[t.name for t in pending] if trials else sorted(outcome.results),
+        ran=progress.started,
         failed=outcome.failed,
         interrupted=outcome.interrupted,
     )
@@ -281,6 +281,10 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
 
 def _run_backend(args, plan, pending, out: Path, progress):
+    from .sweep_local import Outcome
+
+    if not plan.search and not pending:
+        return Outcome()  # every trial finished already
     if args.backend == "local":
         import os
 
@@ -349,7 +353,8 @@ def _report(out: Path, results, total: int, outcome, quiet: bool) -> None:
     msg = f"sweep {state}: {len(results)}/{total} trials finished"
     if outcome.failed:
         msg += f", {len(outcome.failed)} failed"
-    msg += f" -> {out / 'summary.md'}"
+    if results:
+        msg += f" -> {out / 'summary.md'}"
     if outcome.interrupted:
         msg += f"\ncontinue with: python -m train.sweep --resume {out}"
     print(msg, file=sys.stderr if quiet else sys.stdout)

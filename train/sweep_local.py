@@ -34,43 +34,52 @@ class Progress:
         from tqdm import tqdm
 
         self.running: set[str] = set()
+        self.started: list[str] = []
         self.failed = 0
+        self.total = total
+        self.done = done
+        # a log file gets one plain line per event instead of a redrawn bar
+        self.lines = not disable and not sys.stderr.isatty()
         self.bar = tqdm(
             total=total,
             initial=done,
             desc="sweep",
             unit="trial",
-            disable=disable,
-            mininterval=0.0 if sys.stderr.isatty() else 30.0,
+            disable=disable or self.lines,
             dynamic_ncols=True,
         )
         self._refresh()
 
-    def _refresh(self) -> None:
-        self.bar.set_postfix_str(f"running {len(self.running)}, failed {self.failed}")
+    def _refresh(self, event: str = "") -> None:
+        state = f"running {len(self.running)}, failed {self.failed}"
+        self.bar.set_postfix_str(state)
+        if self.lines and event:
+            print(f"sweep: {event}; {self.done}/{self.total} done, {state}", file=sys.stderr)
 
     def start(self, name: str) -> None:
         """A trial started."""
         self.running.add(name)
-        self._refresh()
+        self.started.append(name)
+        self._refresh(f"{name} started")
 
     def finish(self, name: str) -> None:
         """A trial finished with a result."""
         self.running.discard(name)
+        self.done += 1
         self.bar.update(1)
-        self._refresh()
+        self._refresh(f"{name} finished")
 
     def fail(self, name: str, why: str) -> None:
         """A trial failed (counted, and said on the terminal)."""
         self.running.discard(name)
         self.failed += 1
         self.bar.write(f"trial {name} failed: {why}", file=sys.stderr)
-        self._refresh()
+        self._refresh(f"{name} failed")
 
     def stop(self, name: str) -> None:
         """A trial stopped before the end (it resumes with the sweep)."""
         self.running.discard(name)
-        self._refresh()
+        self._refresh(f"{name} stopped")
 
     def close(self) -> None:
         """Leave the final line on the terminal."""

@@ -126,7 +126,8 @@ def parse_domain(text: str, flag: str = "--grid") -> tuple[str, dict[str, Any]]:
             ) from None
         if not lo < hi or (kind == "loguniform" and lo <= 0):
             raise ValueError(
-                f"{flag} {text!r} is invalid: needs LOW < HIGH" + (" and LOW > 0" * (kind == "loguniform"))
+                f"{flag} {text!r} is invalid: needs LOW < HIGH"
+                + (" and LOW > 0" * (kind == "loguniform"))
             )
         if kind == "int":
             lo, hi = int(lo), int(hi)
@@ -284,7 +285,10 @@ class SweepPlan:
     def grid_points(self) -> list[dict[str, Any]]:
         """Every setting of a grid sweep, in the order of the ``--grid`` flags."""
         keys = [k for k, _ in self.grid]
-        return [dict(zip(keys, vals)) for vals in itertools.product(*(v for _, v in self.grid))]
+        return [
+            dict(zip(keys, vals, strict=True))
+            for vals in itertools.product(*(v for _, v in self.grid))
+        ]
 
     def trials(self) -> list[Trial]:
         """All trials of a grid sweep: settings x seeds (setting-major)."""

@@ -12,6 +12,9 @@ state lives in ``<sweep>/ray/tune`` and an interrupted sweep continues with
 from __future__ import annotations
 
 import json
+import logging
+import math
+import os
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -90,7 +93,12 @@ def _ray_trial(config: dict[str, Any], sweep_dir: str, plan: dict[str, Any]) -> 
     result = run_trial(_trial_of(config, plan), Path(sweep_dir))
     if result.get("status") != "completed":
         raise RuntimeError(f"trial {result.get('trial')} ended {result.get('status')!r}")
-    tune.report({**result_scalars(result), "result_json": json.dumps(result)})
+    # Tune's loggers take numbers (TensorBoard warns on inf): the finite ones, the objective,
+    # and the whole result as JSON text for the driver
+    scalars = {k: v for k, v in result_scalars(result).items() if math.isfinite(v)}
+    if plan.get("search"):
+        scalars[plan["metric"]] = result_scalars(result).get(plan["metric"], math.nan)
+    tune.report({**scalars, "result_json": json.dumps(result)})
 
 
 def _search_space(plan: SweepPlan) -> dict[str, Any]:
@@ -107,7 +115,7 @@ def _search_space(plan: SweepPlan) -> dict[str, Any]:
     return {"params": space}
 
 
-def _new_tuner(plan: SweepPlan, trials: Sequence[Trial], trainable, exp: Path, limit: int):
+def _new_tuner(plan: SweepPlan, trials: Sequence[Trial], trainable, exp: Path, limit):
     if plan.search is None:
         param_space = {"trial": tune.grid_search([t.to_dict() for t in trials])}
         tune_config = tune.TuneConfig(max_concurrent_trials=limit, trial_dirname_creator=_dirname)
@@ -117,8 +125,10 @@ def _new_tuner(plan: SweepPlan, trials: Sequence[Trial], trainable, exp: Path, l
         optuna = OptunaSearch(metric=plan.metric, mode=plan.mode, seed=0)
         searcher = Repeater(optuna, repeat=len(plan.seeds), set_index=True)
         param_space = _search_space(plan)
+        if limit:
+            searcher = ConcurrencyLimiter(searcher, max_concurrent=limit)
         tune_config = tune.TuneConfig(
-            search_alg=ConcurrencyLimiter(searcher, max_concurrent=limit),
+            search_alg=searcher,
             num_samples=plan.samples * len(plan.seeds),
             trial_dirname_creator=_dirname,
         )
@@ -134,8 +144,10 @@ def _new_tuner(plan: SweepPlan, trials: Sequence[Trial], trainable, exp: Path, l
     )
 
 
-def _collect(grid: Any, plan: dict[str, Any]) -> Outcome:
-    out = Outcome()
+def _collect(grid: Any, expected: int | None) -> Outcome:
+    """Results and failures of Tune's result grid; interrupted if a trial did not end (or,
+    for a search, fewer than ``expected`` trials were started)."""
+    out, unfinished = Outcome(), 0
     for r in grid:
         name = _trial_name(r.config or {}) or str(r.path)
         if r.error is not None:
@@ -143,6 +155,9 @@ def _collect(grid: Any, plan: dict[str, Any]) -> Outcome:
         elif r.metrics and "result_json" in r.metrics:
             result = json.loads(r.metrics["result_json"])
             out.results[result["trial"]] = result
+        else:
+            unfinished += 1
+    out.interrupted = unfinished > 0 or (expected is not None and len(grid) < expected)
     return out
 
 
@@ -161,9 +176,14 @@ def run_ray(
     or the Ray instance this process already joined)."""
     sweep_dir = Path(sweep_dir).resolve()
     exp = sweep_dir.joinpath(*EXPERIMENT)
+    # the sweep draws its own progress display instead of Tune's tables
+    os.environ.setdefault("RAY_AIR_NEW_OUTPUT", "0")
+    logging.getLogger("ray.tune").setLevel(logging.WARNING)
     started = False
     if not ray.is_initialized():
-        kwargs: dict[str, Any] = dict(include_dashboard=False, log_to_driver=False)
+        kwargs: dict[str, Any] = dict(
+            include_dashboard=False, log_to_driver=False, logging_level=logging.WARNING
+        )
         if address:
             kwargs["address"] = address
         else:
@@ -181,12 +201,10 @@ def run_ray(
                 str(exp), trainable, resume_unfinished=True, resume_errored=True
             )
         else:
-            tuner = _new_tuner(plan, trials, trainable, exp, max_concurrent or 0)
-        out = _collect(tuner.fit(), plan.to_dict())
+            tuner = _new_tuner(plan, trials, trainable, exp, max_concurrent)
+        grid = tuner.fit()
+        return _collect(grid, None if plan.search is None else plan.samples * len(plan.seeds))
     finally:
         _PROGRESS.remove(progress)
         if started:
             ray.shutdown()
-    expected = len(trials) if plan.search is None else plan.samples * len(plan.seeds)
-    out.interrupted = len(out.results) + len(out.failed) < expected
-    return out

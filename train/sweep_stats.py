@@ -4,8 +4,8 @@ Per setting and metric the summary gives the interquartile mean (IQM) over the t
 seeds with a 95 % percentile confidence interval from the stratified bootstrap, both from
 ``rliable`` (Agarwal et al., "Deep RL at the Edge of the Statistical Precipice", NeurIPS
 2021): ``rliable.metrics.aggregate_iqm`` is the point estimate, ``rliable.library.
-StratifiedBootstrap`` resamples the seeds, with an explicit seeded generator so that the
-summary is reproducible. With fewer than four seeds the IQM trims nothing (it is the mean).
+StratifiedBootstrap`` resamples the seeds, drawing from an explicit seeded generator so that
+the summary is reproducible. With fewer than four seeds the IQM trims nothing (it is the mean).
 
 A band time that is never reached (inf) counts as the evaluation episode's length, so the
 statistics stay finite; the table marks such cells with ">=" (a lower bound).
@@ -40,19 +40,34 @@ def _iqm_columns(x: np.ndarray) -> np.ndarray:
     return np.atleast_1d(trim_mean(x, 0.25, axis=0))
 
 
+def _seeded_bootstrap(scores: np.ndarray, seed: int):
+    """rliable's stratified bootstrap (runs resampled within each column), drawing from its
+    own seeded generator: rliable 1.2 draws the indices from NumPy's global generator and
+    ignores ``random_state``, so a summary would change from one call to the next."""
+    from rliable import library
+
+    class SeededStratifiedBootstrap(library.StratifiedBootstrap):
+        def update_indices(self):
+            runs = self.generator.integers(self._num_items, size=self._args_shape)
+            return (runs, *self._strata_indices)
+
+    return SeededStratifiedBootstrap(scores, seed=np.random.default_rng(seed))
+
+
 def iqm_ci(
     scores: np.ndarray, reps: int = 2000, seed: int = 0
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """IQM over runs and its 95 % stratified-bootstrap CI, per column of ``scores``
     (shape ``(runs, columns)``): ``(point, low, high)``, each of shape ``(columns,)``."""
-    from rliable import library, metrics
+    from rliable import metrics
 
     scores = np.asarray(scores, dtype=float)
     if scores.ndim != 2 or scores.shape[0] < 1:
         raise ValueError(f"scores of shape {scores.shape} are invalid: (runs >= 1, columns)")
     point = np.array([metrics.aggregate_iqm(scores[:, j]) for j in range(scores.shape[1])])
-    boot = library.StratifiedBootstrap(scores, seed=np.random.default_rng(seed))
-    ci = boot.conf_int(_iqm_columns, reps=reps, size=0.95, method="percentile")
+    ci = _seeded_bootstrap(scores, seed).conf_int(
+        _iqm_columns, reps=reps, size=0.95, method="percentile"
+    )
     return point, ci[0], ci[1]
 
 
@@ -98,20 +113,29 @@ def _group(results: Sequence[Mapping[str, Any]]) -> dict[str, list[Mapping[str, 
     return groups
 
 
-def _metric_table(groups: Mapping[str, list], part: str, reps: int) -> list[str]:
+def _estimates(groups: Mapping[str, list], reps: int) -> dict[tuple[str, str], list[str]]:
+    """Table cells ``IQM [low, high]`` per (setting, part), one bootstrap per setting over
+    all its columns (final and best metrics together)."""
+    cells: dict[tuple[str, str], list[str]] = {}
+    for label, rs in groups.items():
+        parts = [p for p in ("final", "best") if all(r.get(p) for r in rs)]
+        cols = [(p, m, _values(rs, p, m[0])) for p in parts for m in METRICS]
+        if not cols:
+            continue
+        point, lo, hi = iqm_ci(np.array([c[2][0] for c in cols]).T, reps=reps)
+        for (part, (_, _, fmt), (_, cens)), p, a, b in zip(cols, point, lo, hi, strict=True):
+            mark = ">= " if cens else ""
+            text = f"{mark}{fmt.format(p)} [{fmt.format(a)}, {fmt.format(b)}]"
+            cells.setdefault((label, part), []).append(text)
+    return cells
+
+
+def _metric_table(groups: Mapping[str, list], part: str, cells: Mapping) -> list[str]:
     head = "| setting | seeds | " + " | ".join(t for _, t, _ in METRICS) + " |"
     lines = [head, "|" + "---|" * (len(METRICS) + 2)]
     for label, rs in groups.items():
-        if not all(r.get(part) for r in rs):
-            lines.append(f"| {label} | {len(rs)} | " + " | ".join("-" for _ in METRICS) + " |")
-            continue
-        cols = [_values(rs, part, key) for key, _, _ in METRICS]
-        point, lo, hi = iqm_ci(np.array([c[0] for c in cols]).T, reps=reps)
-        cells = []
-        for (_, _, fmt), (_, cens), p, a, b in zip(METRICS, cols, point, lo, hi):
-            mark = ">= " if cens else ""
-            cells.append(f"{mark}{fmt.format(p)} [{fmt.format(a)}, {fmt.format(b)}]")
-        lines.append(f"| {label} | {len(rs)} | " + " | ".join(cells) + " |")
+        row = cells.get((label, part), ["-"] * len(METRICS))
+        lines.append(f"| {label} | {len(rs)} | " + " | ".join(row) + " |")
     return lines
 
 
@@ -140,14 +164,15 @@ def summary_markdown(
 ) -> str:
     """The summary: IQM [95 % CI] tables (final and best model) and the aims met."""
     groups = _group(results)
+    cells = _estimates(groups, reps)
     lines = [*header, ""]
     lines += ["## Final model: IQM [95 % CI] over seeds", ""]
-    lines += _metric_table(groups, "final", reps)
+    lines += _metric_table(groups, "final", cells)
     lines += ["", "## Best model during training: IQM [95 % CI] over seeds", ""]
     lines += [
         "Picked on the same evaluation seeds it is scored on, so optimistic.",
         "",
-        *_metric_table(groups, "best", reps),
+        *_metric_table(groups, "best", cells),
     ]
     lines += ["", "## Aims: seeds whose final model meets each", ""]
     lines += [*_aims_table(groups), ""]
@@ -166,7 +191,7 @@ def summary_markdown(
 
 def _curve_matrix(rs: Sequence[Mapping[str, Any]], key: str) -> tuple[np.ndarray, np.ndarray]:
     """Steps evaluated by every seed and the (seeds, steps) values there."""
-    common = set.intersection(*(set(int(c["step"]) for c in r.get("curve", [])) for r in rs))
+    common = set.intersection(*({int(c["step"]) for c in r.get("curve", [])} for r in rs))
     steps = np.array(sorted(common), dtype=float)
     vals = []
     for r in rs:
@@ -187,16 +212,21 @@ def curves_figure(results: Sequence[Mapping[str, Any]], path: Path, reps: int = 
 
     from baselines.io import atomic_path
 
-    groups = _group(results)
+    shown = METRICS[:4]
     fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), constrained_layout=True)
-    for ax, (key, title, _) in zip(axes.flat, METRICS[:4]):
-        for i, (label, rs) in enumerate(groups.items()):
-            steps, vals = _curve_matrix(rs, key)
-            if not len(steps):
-                continue
-            point, lo, hi = iqm_ci(vals, reps=reps, seed=i)
-            ax.plot(steps, point, color=f"C{i}", label=f"{label} ({len(rs)} seeds)")
-            ax.fill_between(steps, lo, hi, color=f"C{i}", alpha=0.2, linewidth=0)
+    for i, (label, rs) in enumerate(_group(results).items()):
+        mats = [_curve_matrix(rs, key) for key, _, _ in shown]
+        steps = mats[0][0]
+        if not len(steps):
+            continue
+        point, lo, hi = (
+            a.reshape(len(shown), len(steps))
+            for a in iqm_ci(np.concatenate([m[1] for m in mats], axis=1), reps=reps, seed=i)
+        )
+        for j, ax in enumerate(axes.flat):
+            ax.plot(steps, point[j], color=f"C{i}", label=f"{label} ({len(rs)} seeds)")
+            ax.fill_between(steps, lo[j], hi[j], color=f"C{i}", alpha=0.2, linewidth=0)
+    for ax, (key, title, _) in zip(axes.flat, shown, strict=True):
         ax.set_title(title)
         ax.set_xlabel("training steps")
         if key == "ss_error_median":
