@@ -162,7 +162,7 @@ def test_ray_backend_gives_the_local_results(local_sweep, tmp_path):
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
     try:
         address = ray.get_runtime_context().gcs_address
-        r = _cli(*SWEEP, "--backend", "ray", "--address", address, "--out", str(out), "--quiet")
+        r = _cli(*SWEEP, "--backend", "ray", "--address", address, "--out", str(out), "--no-figure")
         assert r.returncode == 0, r.stderr[-3000:]
     finally:
         ray.shutdown()

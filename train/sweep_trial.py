@@ -144,6 +144,12 @@ def collect(trial: Trial, run_dir: Path, settings) -> dict[str, Any]:
     best = json.loads(best_path.read_text(encoding="utf-8")) if best_path.is_file() else {}
     rows, cfg = _final_rows(run_dir, settings)
     write_csv(run_dir / FINAL_ROWS, rows)
+    final = dict(record.get("final_summary") or {})
+    if final and "score" not in final:
+        # the final evaluation's summary carries no score when it ran after the last step
+        from .callbacks import eval_score
+
+        final["score"] = eval_score(final)
     return {
         "trial": trial.name,
         "setting": trial.setting,
@@ -153,7 +159,7 @@ def collect(trial: Trial, run_dir: Path, settings) -> dict[str, Any]:
         "spec_hash": trial.spec_hash,
         "status": record.get("status", "unknown"),
         "num_timesteps": int(record.get("num_timesteps", 0)),
-        "final": record.get("final_summary") or {},
+        "final": final,
         "best": best.get("summary", {}),
         "best_step": best.get("step"),
         "aims": aims(rows, cfg),
