@@ -149,7 +149,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     pin_threads()
     try:
         return _main(args, parser)
-    except (ValueError, TypeError, FileNotFoundError, FileExistsError, ImportError) as e:
+    except (
+        ValueError,
+        TypeError,
+        FileNotFoundError,
+        FileExistsError,
+        ImportError,
+        ConnectionError,
+    ) as e:
         parser.exit(2, f"{parser.prog}: error: {e}\n")
     return 2  # pragma: no cover
 

@@ -188,7 +188,14 @@ def run_ray(
             kwargs["address"] = address
         else:
             kwargs["num_cpus"] = num_cpus
-        ray.init(**kwargs)
+        try:
+            ray.init(**kwargs)
+        except ConnectionError as e:
+            raise ConnectionError(
+                f"--address {address!r}: cannot join the Ray cluster ({e}). A cluster with "
+                "token authentication needs RAY_AUTH_MODE=token and its token here (see "
+                "docs/sweeps.md)"
+            ) from None
         started = True
     _PROGRESS.append(progress)
     try:
