@@ -95,6 +95,7 @@ def local_sweep(tmp_path_factory):
             if (first / "sweep_trial.json").is_file():
                 break
             time.sleep(0.1)
+        os.kill(p.pid, signal.SIGSTOP)  # frozen, the sweep starts no worker we would miss
         for pid in [*_descendants(p.pid), p.pid]:
             with contextlib.suppress(ProcessLookupError):
                 os.kill(pid, signal.SIGKILL)
@@ -247,6 +248,21 @@ def test_out_and_resume_are_protected(tmp_path, capsys):
             main([*argv, "--quiet"])
         err = capsys.readouterr().err
         assert e.value.code == 2 and message in err, err
+
+
+def test_a_failing_worker_is_reported_and_the_others_go_on(tmp_path):
+    from train.sweep_local import Progress, run_local
+    from train.sweep_plan import SweepPlan
+
+    plan = SweepPlan(base={}, fixed=[], grid=[], seeds=[0])
+    (trial,) = plan.trials()
+    (tmp_path / "sweep.json").write_text(json.dumps({"trials": []}))  # the worker won't find it
+    progress = Progress(1, disable=True)
+    out = run_local([trial], tmp_path, 1, progress, poll_s=0.05)
+    assert list(out.failed) == [trial.name] and not out.results and not out.interrupted
+    assert progress.failed == 1 and progress.started == [trial.name]
+    log = (tmp_path / "logs" / "default__seed_0.log").read_text()
+    assert "is not in" in log
 
 
 def test_iqm_and_interval_are_rliables_and_reproducible():

@@ -30,11 +30,17 @@ from pathlib import Path
 from typing import Any
 
 __all__ = [
+    "DOMAINS",
     "SWEEP_FILE",
     "SweepPlan",
     "Trial",
+    "load_sweep",
     "parse_domain",
     "parse_grid",
+    "parse_value",
+    "same_plan",
+    "setting_label",
+    "setting_slug",
     "settings_for",
     "split_values",
 ]

@@ -17,6 +17,7 @@ result is already there (and was computed for the same trial definition).
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import os
@@ -24,7 +25,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -196,19 +197,49 @@ def run_trial(trial: Trial | dict[str, Any], sweep_dir: Path, interrupt: Any = N
 
     pin_threads()
     trial = trial if isinstance(trial, Trial) else Trial.from_dict(trial)
-    done = finished_result(trial, sweep_dir)
-    if done is not None:
-        return done
-    t0 = time.perf_counter()
-    run_dir = Path(sweep_dir) / trial.run_dir
-    settings = settings_from_sources(trial.settings)
-    status = _train(trial, run_dir, settings, interrupt)
-    if status != "completed":
-        return {"trial": trial.name, "status": status}
-    result = collect(trial, run_dir, settings)
-    result["wall_trial_s"] = round(time.perf_counter() - t0, 2)
-    write_json(run_dir / RESULT_FILE, result)
+    with _exclusive(Path(sweep_dir), trial):
+        done = finished_result(trial, sweep_dir)
+        if done is not None:
+            return done
+        t0 = time.perf_counter()
+        run_dir = Path(sweep_dir) / trial.run_dir
+        settings = settings_from_sources(trial.settings)
+        status = _train(trial, run_dir, settings, interrupt)
+        if status != "completed":
+            return {"trial": trial.name, "status": status}
+        result = collect(trial, run_dir, settings)
+        result["wall_trial_s"] = round(time.perf_counter() - t0, 2)
+        write_json(run_dir / RESULT_FILE, result)
     return result
+
+
+@contextlib.contextmanager
+def _exclusive(sweep_dir: Path, trial: Trial, wait_s: float = 120.0) -> Iterator[None]:
+    """Hold the trial's lock file: a worker of an earlier, killed sweep session may still be
+    writing its last checkpoint when the sweep is resumed; the new one waits for it."""
+    try:
+        import fcntl
+    except ImportError:  # no POSIX locks: nothing to guard with
+        yield
+        return
+    path = sweep_dir / ".locks" / f"{trial.name.replace('/', '__')}.lock"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a", encoding="utf-8") as f:
+        deadline = time.monotonic() + wait_s
+        while True:
+            try:
+                fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() > deadline:
+                    raise RuntimeError(
+                        f"trial {trial.name} is being run by another process (lock {path})"
+                    ) from None
+                time.sleep(0.5)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
 
 
 def _watch_parent(parent: int) -> None:
