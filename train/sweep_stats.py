@@ -1,0 +1,240 @@
+"""Statistics over seeds for ``python -m train.sweep``: sweep.csv, summary.md, curves.png.
+
+Per setting and metric the summary gives the interquartile mean (IQM) over the training
+seeds with a 95 % percentile confidence interval from the stratified bootstrap, both from
+``rliable`` (Agarwal et al., "Deep RL at the Edge of the Statistical Precipice", NeurIPS
+2021): ``rliable.metrics.aggregate_iqm`` is the point estimate, ``rliable.library.
+StratifiedBootstrap`` resamples the seeds, drawing from an explicit seeded generator so that
+the summary is reproducible. With fewer than four seeds the IQM trims nothing (it is the mean).
+
+A band time that is never reached (inf) counts as the evaluation episode's length, so the
+statistics stay finite; the table marks such cells with ">=" (a lower bound).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["METRICS", "csv_rows", "curves_figure", "iqm_ci", "summary_markdown"]
+
+#: (summary key, title, format) of the metrics in the tables and the figure
+METRICS = (
+    ("ss_error_median", "steady error (m)", "{:.3f}"),
+    ("band_time_max", "into 0.5 m band, slowest seed (s)", "{:.2f}"),
+    ("min_separation_min", "closest pass (m)", "{:.2f}"),
+    ("peak_accel_max", "peak accel (m/s²)", "{:.0f}"),
+    ("score", "score (0: every target met)", "{:.3f}"),
+)
+_CENSORED = ("band_time_max", "band_time_median")
+
+
+def _iqm_columns(x: np.ndarray) -> np.ndarray:
+    """rliable's IQM (25 % trimmed mean) of every column at once (for the bootstrap)."""
+    from scipy.stats import trim_mean
+
+    return np.atleast_1d(trim_mean(x, 0.25, axis=0))
+
+
+def _seeded_bootstrap(scores: np.ndarray, seed: int):
+    """rliable's stratified bootstrap (runs resampled within each column), drawing from its
+    own seeded generator: rliable 1.2 draws the indices from NumPy's global generator and
+    ignores ``random_state``, so a summary would change from one call to the next."""
+    from rliable import library
+
+    class SeededStratifiedBootstrap(library.StratifiedBootstrap):
+        def update_indices(self):
+            runs = self.generator.integers(self._num_items, size=self._args_shape)
+            return (runs, *self._strata_indices)
+
+    return SeededStratifiedBootstrap(scores, seed=np.random.default_rng(seed))
+
+
+def iqm_ci(
+    scores: np.ndarray, reps: int = 2000, seed: int = 0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """IQM over runs and its 95 % stratified-bootstrap CI, per column of ``scores``
+    (shape ``(runs, columns)``): ``(point, low, high)``, each of shape ``(columns,)``."""
+    from rliable import metrics
+
+    scores = np.asarray(scores, dtype=float)
+    if scores.ndim != 2 or scores.shape[0] < 1:
+        raise ValueError(f"scores of shape {scores.shape} are invalid: (runs >= 1, columns)")
+    point = np.array([metrics.aggregate_iqm(scores[:, j]) for j in range(scores.shape[1])])
+    ci = _seeded_bootstrap(scores, seed).conf_int(
+        _iqm_columns, reps=reps, size=0.95, method="percentile"
+    )
+    return point, ci[0], ci[1]
+
+
+def csv_rows(results: Sequence[Mapping[str, Any]], grid_keys: Sequence[str]) -> list[dict]:
+    """One row per trial: setting, grid values, seed, metrics, aims; wall times last."""
+    from .sweep_trial import result_scalars
+
+    rows = []
+    for r in results:
+        row: dict[str, Any] = {"setting": r["setting"]}
+        row.update({k: _cell(r["assignments"].get(k)) for k in grid_keys})
+        row.update(seed=r["seed"], status=r["status"], num_timesteps=r["num_timesteps"])
+        row.update(result_scalars(r))
+        row.update({f"meets: {a['criterion']}": a["met"] for a in r.get("aims", [])})
+        row.update(wall_train_s=r.get("wall_train_s"), wall_trial_s=r.get("wall_trial_s"))
+        rows.append(row)
+    return rows
+
+
+def _cell(v: Any) -> Any:
+    if isinstance(v, (list, dict)):
+        import json
+
+        return json.dumps(v, separators=(",", ":"))
+    return v
+
+
+def _values(results: Sequence[Mapping[str, Any]], part: str, key: str) -> tuple[list, int]:
+    """Per-seed values (censored band times at the horizon) and how many were censored."""
+    vals, censored = [], 0
+    for r in results:
+        v = float((r.get(part) or {}).get(key, math.nan))
+        if key in _CENSORED and not math.isfinite(v):
+            v, censored = float(r["eval_horizon_s"]), censored + 1
+        vals.append(v)
+    return vals, censored
+
+
+def _group(results: Sequence[Mapping[str, Any]]) -> dict[str, list[Mapping[str, Any]]]:
+    groups: dict[str, list[Mapping[str, Any]]] = {}
+    for r in results:
+        groups.setdefault(r["label"], []).append(r)
+    return groups
+
+
+def _estimates(groups: Mapping[str, list], reps: int) -> dict[tuple[str, str], list[str]]:
+    """Table cells ``IQM [low, high]`` per (setting, part), one bootstrap per setting over
+    all its columns (final and best metrics together)."""
+    cells: dict[tuple[str, str], list[str]] = {}
+    for label, rs in groups.items():
+        parts = [p for p in ("final", "best") if all(r.get(p) for r in rs)]
+        cols = [(p, m, _values(rs, p, m[0])) for p in parts for m in METRICS]
+        if not cols:
+            continue
+        point, lo, hi = iqm_ci(np.array([c[2][0] for c in cols]).T, reps=reps)
+        for (part, (_, _, fmt), (_, cens)), p, a, b in zip(cols, point, lo, hi, strict=True):
+            mark = ">= " if cens else ""
+            text = f"{mark}{fmt.format(p)} [{fmt.format(a)}, {fmt.format(b)}]"
+            cells.setdefault((label, part), []).append(text)
+    return cells
+
+
+def _metric_table(groups: Mapping[str, list], part: str, cells: Mapping) -> list[str]:
+    head = "| setting | seeds | " + " | ".join(t for _, t, _ in METRICS) + " |"
+    lines = [head, "|" + "---|" * (len(METRICS) + 2)]
+    for label, rs in groups.items():
+        row = cells.get((label, part), ["-"] * len(METRICS))
+        lines.append(f"| {label} | {len(rs)} | " + " | ".join(row) + " |")
+    return lines
+
+
+def _aims_table(groups: Mapping[str, list]) -> list[str]:
+    names: list[str] = []
+    for rs in groups.values():
+        for r in rs:
+            names += [a["criterion"] for a in r.get("aims", []) if a["criterion"] not in names]
+    if not names:
+        return ["(no aims were evaluated)"]
+    lines = ["| setting | " + " | ".join(names) + " |", "|" + "---|" * (len(names) + 1)]
+    for label, rs in groups.items():
+        cells = []
+        for n in names:
+            met = [a["met"] for r in rs for a in r.get("aims", []) if a["criterion"] == n]
+            cells.append(f"{sum(met)}/{len(met)}" if met else "-")
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    return lines
+
+
+def summary_markdown(
+    results: Sequence[Mapping[str, Any]],
+    header: Sequence[str],
+    reps: int = 2000,
+    figure: str | None = "curves.png",
+) -> str:
+    """The summary: IQM [95 % CI] tables (final and best model) and the aims met."""
+    groups = _group(results)
+    cells = _estimates(groups, reps)
+    lines = [*header, ""]
+    lines += ["## Final model: IQM [95 % CI] over seeds", ""]
+    lines += _metric_table(groups, "final", cells)
+    lines += ["", "## Best model during training: IQM [95 % CI] over seeds", ""]
+    lines += [
+        "Picked on the same evaluation seeds it is scored on, so optimistic.",
+        "",
+        *_metric_table(groups, "best", cells),
+    ]
+    lines += ["", "## Aims: seeds whose final model meets each", ""]
+    lines += [*_aims_table(groups), ""]
+    if figure:
+        lines += [f"![validation curves]({figure})", ""]
+    lines += [
+        "IQM: interquartile mean over training seeds (`rliable.metrics.aggregate_iqm`; the "
+        "mean below four seeds); CI: 95 % percentile interval of the stratified bootstrap over "
+        f"seeds (`rliable.library.StratifiedBootstrap`, {reps} resamples, seed 0). Metrics are "
+        "the training evaluation's summaries over its evaluation seeds (median steady error, "
+        "slowest band entry, closest pass of the pair to another UAV, peak pair acceleration); "
+        "'>=': a seed never entered the band, counted as the evaluation episode's length.",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _curve_matrix(rs: Sequence[Mapping[str, Any]], key: str) -> tuple[np.ndarray, np.ndarray]:
+    """Steps evaluated by every seed and the (seeds, steps) values there."""
+    common = set.intersection(*({int(c["step"]) for c in r.get("curve", [])} for r in rs))
+    steps = np.array(sorted(common), dtype=float)
+    vals = []
+    for r in rs:
+        by_step = {int(c["step"]): float(c.get(key, math.nan)) for c in r["curve"]}
+        row = [by_step[int(s)] for s in steps]
+        if key in _CENSORED:
+            row = [v if math.isfinite(v) else float(r["eval_horizon_s"]) for v in row]
+        vals.append(row)
+    return steps, np.array(vals, dtype=float).reshape(len(rs), len(steps))
+
+
+def curves_figure(results: Sequence[Mapping[str, Any]], path: Path, reps: int = 1000) -> Path:
+    """Validation curves per setting: IQM over seeds with a 95 % CI band, per metric."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from baselines.io import atomic_path
+
+    shown = METRICS[:4]
+    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), constrained_layout=True)
+    for i, (label, rs) in enumerate(_group(results).items()):
+        mats = [_curve_matrix(rs, key) for key, _, _ in shown]
+        steps = mats[0][0]
+        if not len(steps):
+            continue
+        point, lo, hi = (
+            a.reshape(len(shown), len(steps))
+            for a in iqm_ci(np.concatenate([m[1] for m in mats], axis=1), reps=reps, seed=i)
+        )
+        for j, ax in enumerate(axes.flat):
+            ax.plot(steps, point[j], color=f"C{i}", label=f"{label} ({len(rs)} seeds)")
+            ax.fill_between(steps, lo[j], hi[j], color=f"C{i}", alpha=0.2, linewidth=0)
+    for ax, (key, title, _) in zip(axes.flat, shown, strict=True):
+        ax.set_title(title)
+        ax.set_xlabel("training steps")
+        if key == "ss_error_median":
+            ax.set_yscale("log")
+        ax.grid(alpha=0.3)
+    axes.flat[0].legend(fontsize=8)
+    fig.suptitle("Evaluation during training: IQM over seeds, 95 % stratified-bootstrap CI")
+    with atomic_path(Path(path)) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
+    return Path(path)

@@ -1,0 +1,278 @@
+"""One trial of a sweep: train (or resume) its run directory, then collect its result.
+
+Both backends call :func:`run_trial`: the local one in a worker process
+(``python -m train.sweep_trial SWEEP_DIR TRIAL_NAME``), the Ray one inside a Tune trial.
+A trial's run directory is an ordinary ``python -m train`` run directory (resumable with
+``python -m train --resume``); the sweep adds two files to it:
+
+* ``sweep_eval_final.csv``: the final model on every evaluation seed (one row per seed),
+  the rows the acceptance aims are judged on;
+* ``sweep_trial.json``: the trial's result (final and best evaluation summaries, the
+  evaluation curve, the aims met, wall times). Written last: its presence means done.
+
+A trial that is started again continues where its run stopped: from the newest checkpoint
+if there is one, straight to the result if training had finished, and not at all if its
+result is already there (and was computed for the same trial definition).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import json
+import os
+import signal
+import sys
+import threading
+import time
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+from .sweep_plan import SWEEP_FILE, Trial
+
+__all__ = [
+    "FINAL_ROWS",
+    "RESULT_FILE",
+    "aims",
+    "finished_result",
+    "main",
+    "result_scalars",
+    "run_trial",
+]
+
+RESULT_FILE = "sweep_trial.json"
+FINAL_ROWS = "sweep_eval_final.csv"
+
+
+def finished_result(trial: Trial, sweep_dir: Path) -> dict[str, Any] | None:
+    """The stored result of ``trial`` if it finished with this very definition, else None."""
+    path = Path(sweep_dir) / trial.run_dir / RESULT_FILE
+    if not path.is_file():
+        return None
+    try:
+        result = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return result if result.get("spec_hash") == trial.spec_hash else None
+
+
+def _newest_record(run_dir: Path) -> dict[str, Any] | None:
+    """run.json, or the newest run_resumed_<N>.json after resumes."""
+    names = sorted(run_dir.glob("run_resumed_*.json"))
+    path = names[-1] if names else run_dir / "run.json"
+    if not path.is_file():
+        return None
+    return json.loads(path.read_text(encoding="utf-8"))
+
+
+def _has_checkpoint(run_dir: Path) -> bool:
+    from .checkpoint import latest_checkpoint
+
+    try:
+        latest_checkpoint(run_dir)
+    except FileNotFoundError:
+        return False
+    return True
+
+
+def _train(trial: Trial, run_dir: Path, settings, interrupt) -> str:
+    """Train or resume the run; its final status."""
+    from .run import train
+
+    record = _newest_record(run_dir) if run_dir.is_dir() else None
+    if (
+        record is not None
+        and record.get("status") == "completed"
+        and int(record.get("num_timesteps", -1)) >= settings.total_steps
+    ):
+        return "completed"  # trained already; only the result is missing
+    resume = run_dir if run_dir.is_dir() and _has_checkpoint(run_dir) else None
+    # a run directory without a checkpoint holds nothing worth keeping: start it afresh
+    res = train(
+        settings, run_dir, resume=resume, quiet=True, overwrite=resume is None, interrupt=interrupt
+    )
+    return res.status
+
+
+def _final_rows(run_dir: Path, settings) -> tuple[list[dict[str, Any]], Any]:
+    """The final model evaluated on each evaluation seed (the rows the aims judge)."""
+    from baselines import make_pair_policy
+    from pairflock_env import make_config
+
+    from .run import evaluate_policy_rows
+
+    cfg = make_config(settings.preset, **settings.eval_overrides())
+    policy = make_pair_policy(f"sb3:{run_dir / 'final_model.zip'}", cfg)
+    return evaluate_policy_rows(policy, cfg, settings.eval_seeds), cfg
+
+
+def aims(rows: list[dict[str, Any]], cfg: Any) -> list[dict[str, Any]]:
+    """Which of the project's acceptance aims the evaluation ``rows`` meet.
+
+    The thresholds are the project's (``train.evaluate.acceptance``), judged at the
+    evaluation task's swarm size and start; each entry is ``{criterion, met, measured}``,
+    with the criterion's task prefix (``N=20 corners:``) dropped so that settings share names.
+    """
+    from .evaluate import acceptance
+
+    tagged = [{**r, "policy": "learned", "n_uavs": cfg.n_uavs, "init": cfg.init} for r in rows]
+    out = []
+    for criterion, ok, measured in acceptance(tagged, n_uavs=cfg.n_uavs, init=cfg.init):
+        out.append(
+            {"criterion": criterion.split(": ", 1)[-1], "met": bool(ok), "measured": measured}
+        )
+    return out
+
+
+def _read_curve(run_dir: Path) -> list[dict[str, float]]:
+    path = run_dir / "eval.csv"
+    if not path.is_file():
+        return []
+    with open(path, encoding="utf-8") as f:
+        return [
+            {k: float(v) for k, v in r.items() if k != "wall_s" and v not in ("", None)}
+            for r in csv.DictReader(f)
+        ]
+
+
+def collect(trial: Trial, run_dir: Path, settings) -> dict[str, Any]:
+    """The result of a trained trial (see the module docstring)."""
+    from baselines.io import write_csv
+
+    record = _newest_record(run_dir) or {}
+    best_path = run_dir / "best_model.json"
+    best = json.loads(best_path.read_text(encoding="utf-8")) if best_path.is_file() else {}
+    rows, cfg = _final_rows(run_dir, settings)
+    write_csv(run_dir / FINAL_ROWS, rows)
+    final = dict(record.get("final_summary") or {})
+    if final and "score" not in final:
+        # the final evaluation's summary carries no score when it ran after the last step
+        from .callbacks import eval_score
+
+        final["score"] = eval_score(final)
+    return {
+        "trial": trial.name,
+        "setting": trial.setting,
+        "label": trial.label,
+        "assignments": trial.assignments,
+        "seed": trial.seed,
+        "spec_hash": trial.spec_hash,
+        "status": record.get("status", "unknown"),
+        "num_timesteps": int(record.get("num_timesteps", 0)),
+        "final": final,
+        "best": best.get("summary", {}),
+        "best_step": best.get("step"),
+        "aims": aims(rows, cfg),
+        "curve": _read_curve(run_dir),
+        "eval_horizon_s": float(cfg.horizon),
+        "wall_train_s": float(record.get("wall_s", 0.0)),
+    }
+
+
+def result_scalars(result: dict[str, Any]) -> dict[str, float]:
+    """The numbers of a result by column name: ``final_<summary key>``, ``best_<summary
+    key>``, ``best_step`` and ``aims_met`` (how many aims the final model meets)."""
+    out: dict[str, float] = {}
+    for part in ("final", "best"):
+        for k, v in (result.get(part) or {}).items():
+            out[f"{part}_{k}"] = float(v)
+    if result.get("best_step") is not None:
+        out["best_step"] = float(result["best_step"])
+    out["aims_met"] = float(sum(a["met"] for a in result.get("aims", [])))
+    return out
+
+
+def run_trial(trial: Trial | dict[str, Any], sweep_dir: Path, interrupt: Any = None) -> dict:
+    """Run one trial to completion (or until ``interrupt`` asks to stop) and return its result.
+
+    The result of a finished trial is ``sweep_trial.json``; an interrupted trial returns
+    ``{"trial": name, "status": "interrupted ..."}`` and writes no result, so that the next
+    start resumes it.
+    """
+    from baselines.io import write_json
+
+    from .run import pin_threads
+    from .settings import settings_from_sources
+
+    pin_threads()
+    trial = trial if isinstance(trial, Trial) else Trial.from_dict(trial)
+    with _exclusive(Path(sweep_dir), trial):
+        done = finished_result(trial, sweep_dir)
+        if done is not None:
+            return done
+        t0 = time.perf_counter()
+        run_dir = Path(sweep_dir) / trial.run_dir
+        settings = settings_from_sources(trial.settings)
+        status = _train(trial, run_dir, settings, interrupt)
+        if status != "completed":
+            return {"trial": trial.name, "status": status}
+        result = collect(trial, run_dir, settings)
+        result["wall_trial_s"] = round(time.perf_counter() - t0, 2)
+        write_json(run_dir / RESULT_FILE, result)
+    return result
+
+
+@contextlib.contextmanager
+def _exclusive(sweep_dir: Path, trial: Trial, wait_s: float = 120.0) -> Iterator[None]:
+    """Hold the trial's lock file: a worker of an earlier, killed sweep session may still be
+    writing its last checkpoint when the sweep is resumed; the new one waits for it."""
+    try:
+        import fcntl
+    except ImportError:  # no POSIX locks: nothing to guard with
+        yield
+        return
+    path = sweep_dir / ".locks" / f"{trial.name.replace('/', '__')}.lock"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "a", encoding="utf-8") as f:
+        deadline = time.monotonic() + wait_s
+        while True:
+            try:
+                fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() > deadline:
+                    raise RuntimeError(
+                        f"trial {trial.name} is being run by another process (lock {path})"
+                    ) from None
+                time.sleep(0.5)
+        try:
+            yield
+        finally:
+            fcntl.flock(f, fcntl.LOCK_UN)
+
+
+def _watch_parent(parent: int) -> None:
+    """Stop cleanly (as on Ctrl-C) if the sweep process that started this worker dies."""
+
+    def loop() -> None:
+        while os.getppid() == parent:
+            time.sleep(1.0)
+        os.kill(os.getpid(), signal.SIGINT)
+
+    threading.Thread(target=loop, name="sweep-parent-watch", daemon=True).start()
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Worker entry of the local backend: ``python -m train.sweep_trial SWEEP_DIR NAME``."""
+    from .callbacks import GracefulInterrupt
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    if len(args) != 2:
+        print("usage: python -m train.sweep_trial SWEEP_DIR TRIAL_NAME", file=sys.stderr)
+        return 2
+    sweep_dir, name = Path(args[0]), args[1]
+    stored = json.loads((sweep_dir / SWEEP_FILE).read_text(encoding="utf-8"))
+    match = [t for t in stored["trials"] if t["name"] == name]
+    if not match:
+        print(f"trial {name!r} is not in {sweep_dir / SWEEP_FILE}", file=sys.stderr)
+        return 2
+    _watch_parent(os.getppid())
+    with GracefulInterrupt() as interrupt:
+        result = run_trial(match[0], sweep_dir, interrupt)
+    print(f"{name}: {result['status']}", file=sys.stderr)
+    return 0 if result["status"] == "completed" else 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
