@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from baselines import make_pair_policy
-from baselines.rollout import rollout, trace_metrics
+from baselines.evaluation.rollout import rollout, trace_metrics
 from pairflock_env import PairFlockCore, make_config, parallel_env
 
 

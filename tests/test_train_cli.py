@@ -188,7 +188,7 @@ def test_cli_smoke_run_writes_a_complete_run_directory(tmp_path):
     assert steps[0] < 128 and steps[-1] == 256  # initial policy, periodic, final
     # the saved policy plugs into the action slot and runs the baselines' rollout
     from baselines import make_pair_policy
-    from baselines.rollout import rollout, trace_metrics
+    from baselines.evaluation.rollout import rollout, trace_metrics
     from pairflock_env import make_config
 
     cfg = make_config("paper", n_uavs=8, pair_accel_limit=50.0, horizon=0.3)

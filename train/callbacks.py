@@ -1,8 +1,8 @@
 """SB3 callbacks of the training CLI: progress bar, periodic evaluation, checkpoints, stop.
 
-Evaluation runs the policy in memory through ``baselines.rollout.rollout`` (the rollout and
-metrics code of the paper reproduction and the benchmark), on the evaluation seeds, and logs
-it next to the analytic controllers (computed once per run). Checkpoints are taken at the
+Evaluation runs the policy in memory through ``baselines.evaluation.rollout.rollout`` (the
+rollout and metrics code of the paper reproduction and the benchmark), on the evaluation seeds,
+and logs it next to the analytic controllers (computed once per run). Checkpoints are taken at the
 start of a rollout, after the previous gradient update, where the model, the environment and
 the random generators together define the rest of the run exactly.
 """

@@ -31,8 +31,8 @@ EPILOG = textwrap.dedent(
     every file is written atomically (temporary file + rename).
 
     evaluation: every --eval-every steps the policy runs full episodes (the preset's 50 s) on
-    --eval-seeds through baselines.rollout, the code of the paper reproduction, and is logged
-    next to --eval-baselines. Ctrl-C stops cleanly: a checkpoint and final_model.zip are
+    --eval-seeds through baselines.evaluation.rollout, the code of the paper reproduction, and is
+    logged next to --eval-baselines. Ctrl-C stops cleanly: a checkpoint and final_model.zip are
     written and the exit status is 130; a second Ctrl-C aborts at once.
 
     examples:

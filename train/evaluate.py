@@ -1,5 +1,5 @@
 """Evaluate a trained pair policy next to the analytic controllers, with the reproduction's
-rollout and metrics (``baselines.rollout``), on held-out seeds.
+rollout and metrics (``baselines.evaluation.rollout``), on held-out seeds.
 
     python -m train.evaluate models/pair_n20_a50.zip                 # N = 20, 10 seeds
     python -m train.evaluate models/pair_n20_a50.zip --n-uavs 20 50 100 --init corners random
@@ -41,7 +41,7 @@ COLUMNS = (
 
 
 def _task_overrides(model_path: Path) -> tuple[str, dict[str, Any]]:
-    from baselines.sb3_policy import read_metadata
+    from baselines.controllers.sb3 import read_metadata
 
     meta = read_metadata(model_path)
     settings = meta.get("settings")
@@ -65,7 +65,7 @@ def run_job(
     except ImportError:  # pragma: no cover
         pass
     from baselines import make_pair_policy
-    from baselines.rollout import rollout, trace_metrics
+    from baselines.evaluation.rollout import rollout, trace_metrics
     from pairflock_env import make_config
 
     preset, over = _task_overrides(Path(model_path))
@@ -93,7 +93,7 @@ def run_job(
 
 
 def summary_table(rows: list[dict[str, Any]], policies: list[str]) -> str:
-    from baselines.report import stat_cell
+    from baselines.reporting.tables import stat_cell
 
     header = "| N | init | policy | limit (m/s^2) | " + " | ".join(c[1] for c in COLUMNS) + " |"
     lines = [header, "|" + "---|" * (len(COLUMNS) + 4)]
@@ -215,7 +215,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from tqdm import tqdm
 
     from baselines import POLICIES
-    from baselines.io import atomic_write_text, run_record, write_csv, write_json
+    from baselines.evaluation.io import atomic_write_text, run_record, write_csv, write_json
 
     from .settings import parse_assignment
 
@@ -275,7 +275,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"# Evaluation of `{args.model}`",
         "",
         f"Held-out seeds {seeds[0]}-{seeds[-1]}; full episodes; median [min-max] over seeds; "
-        "metrics of `pairflock_env.metrics` via `baselines.rollout`.",
+        "metrics of `pairflock_env.metrics` via `baselines.evaluation.rollout`.",
         "",
         table,
         "",

@@ -112,7 +112,7 @@ def _build_model(settings: RunSettings, venv):
 
 def evaluate_policy_rows(policy: Any, cfg: Any, seeds: list[int]) -> list[dict[str, Any]]:
     """Metrics per seed of ``policy`` on ``cfg`` with the baselines' rollout code."""
-    from baselines.rollout import rollout, trace_metrics
+    from baselines.evaluation.rollout import rollout, trace_metrics
 
     return trace_metrics(rollout(cfg, policy, seeds))
 
@@ -129,7 +129,7 @@ def _metadata(settings: RunSettings, interface: Any, cfg: Any) -> dict[str, Any]
 def _write_settings(out: Path, settings: RunSettings) -> None:
     import yaml
 
-    from baselines.io import atomic_write_text
+    from baselines.evaluation.io import atomic_write_text
 
     text = yaml.safe_dump(settings.to_dict(), sort_keys=False, default_flow_style=None)
     atomic_write_text(out / "settings.yaml", text)
@@ -139,7 +139,7 @@ def _csv_rows_text(rows: list[dict[str, Any]]) -> str:
     import csv
     import io
 
-    from baselines.io import format_value
+    from baselines.evaluation.io import format_value
 
     cols: list[str] = []
     for r in rows:
@@ -174,8 +174,8 @@ def train(
     from stable_baselines3.common.logger import CSVOutputFormat, Logger, TensorBoardOutputFormat
 
     from baselines import make_pair_policy
-    from baselines.io import atomic_write_text, run_record, write_json
-    from baselines.sb3_policy import SB3PairPolicy
+    from baselines.controllers.sb3 import SB3PairPolicy
+    from baselines.evaluation.io import atomic_write_text, run_record, write_json
     from pairflock_env import make_config
 
     from .callbacks import (

@@ -137,7 +137,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     import torch
 
     torch.set_num_threads(1)
-    from baselines.io import run_record, write_json
+    from baselines.evaluation.io import run_record, write_json
 
     from .settings import DEFAULT_HYPERPARAMETERS, parse_assignment
 

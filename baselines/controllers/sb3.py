@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .policies import check_observation, resolve_env
+from .base import check_observation, resolve_env
 
 __all__ = ["ALGORITHMS", "METADATA_KEY", "SB3PairPolicy", "load_sb3_policy", "read_metadata"]
 

@@ -20,9 +20,8 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from baselines.evaluation.io import atomic_write_bytes
 from pairflock_env.render import PAIR_COLORS, UNPAIRED_COLOR, draw_swarm
-
-from .io import atomic_write_bytes
 
 __all__ = [
     "POLICY_STYLE",

@@ -22,7 +22,7 @@ import numpy as np
 
 from pairflock_env.pairing import sliding_surface
 
-from .policies import PairPolicy
+from .base import PairPolicy
 
 __all__ = ["SMC_DEFAULTS", "SlidingModeController"]
 

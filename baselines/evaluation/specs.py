@@ -65,7 +65,7 @@ class PolicySpec:
         return self.name.split(":", 1)[0]
 
     def build(self, env: Any) -> Any:
-        from . import make_pair_policy
+        from baselines.controllers import make_pair_policy
 
         return make_pair_policy(self.name, env, **dict(self.gains))
 
@@ -121,7 +121,7 @@ def parse_policy(spec: str) -> PolicySpec:
     """Parse one policy spec (module docstring); unknown names raise ``ValueError`` listing
     the registered ones. Prefix arguments that name an existing local file are made absolute
     so that worker processes started elsewhere find it."""
-    from . import POLICIES
+    from baselines.controllers import POLICIES
 
     if not isinstance(spec, str) or not spec.strip():
         raise ValueError(f"policy spec {spec!r} is invalid: expected e.g. 'smc' or 'smc:k=200'")

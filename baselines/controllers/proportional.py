@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .policies import PairPolicy
+from .base import PairPolicy
 
 __all__ = ["ProportionalController"]
 

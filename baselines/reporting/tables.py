@@ -15,9 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from baselines.evaluation.io import atomic_write_bytes
 from pairflock_env.metrics import METRIC_DOCS
-
-from .io import atomic_write_bytes
 
 __all__ = [
     "ACCURACY_METRICS",
@@ -271,6 +270,8 @@ def make_figures(
     dim, horizon); ``policies``: labels by index; ``traces[(i, j)]`` as from
     :func:`baselines.sweep.run_job`.
     """
+    from baselines.evaluation.specs import slug
+
     from .figures import (
         error_figure,
         policy_styles,
@@ -280,7 +281,6 @@ def make_figures(
         surface_panels_figure,
         trajectories_3d_figure,
     )
-    from .specs import slug
 
     out_dir = Path(out_dir)
     styles = policy_styles(policies)
@@ -406,6 +406,6 @@ def json_rows(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
 
 def dumps_stable(obj: Any) -> str:
     """JSON text that is byte-identical for equal content (sorted keys, fixed layout)."""
-    from .io import _json_default
+    from baselines.evaluation.io import _json_default
 
     return json.dumps(obj, indent=1, sort_keys=True, default=_json_default, allow_nan=False) + "\n"
