@@ -189,9 +189,9 @@ def _parse_sets(items: list[str], flag: str):
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    from .run import pin_threads
+    from baselines.evaluation.parallel import pin_threads
 
-    pin_threads()
+    pin_threads(load_torch=True)
     from .callbacks import GracefulInterrupt
 
     try:

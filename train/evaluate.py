@@ -21,11 +21,12 @@ import os
 import sys
 import time
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from baselines.evaluation.parallel import imap_unordered, pin_threads
 
 __all__ = ["acceptance", "main", "run_job", "summary_table"]
 
@@ -57,13 +58,7 @@ def run_job(
     model_path: str, policy: str, n_uavs: int, init: str, seeds: list[int], extra: dict[str, Any]
 ) -> list[dict[str, Any]]:
     """Metrics per seed of one (policy, N, init) combination."""
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
-    try:
-        import torch
-
-        torch.set_num_threads(1)
-    except ImportError:  # pragma: no cover
-        pass
+    pin_threads(load_torch=True)
     from baselines import make_pair_policy
     from baselines.evaluation.rollout import rollout, trace_metrics
     from pairflock_env import make_config
@@ -209,7 +204,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    pin_threads()
     parser = build_parser()
     args = parser.parse_args(argv)
     from tqdm import tqdm
@@ -256,16 +251,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     t0 = time.perf_counter()
     rows: list[dict[str, Any]] = []
     bar = tqdm(total=len(jobs), desc="evaluate", unit="job", disable=args.quiet)
-    if args.workers <= 1:
-        for j in jobs:
-            rows += run_job(*j)
-            bar.update()
-    else:
-        with ProcessPoolExecutor(max_workers=args.workers) as pool:
-            futs = [pool.submit(run_job, *j) for j in jobs]
-            for f in as_completed(futs):
-                rows += f.result()
-                bar.update()
+    for _, job_rows in imap_unordered(run_job, jobs, args.workers):
+        rows += job_rows
+        bar.update()
     bar.close()
     order = {p: i for i, p in enumerate(policies)}
     rows.sort(key=lambda r: (r["init"] != "corners", r["n_uavs"], order[r["policy"]], r["seed"]))

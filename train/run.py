@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 
+from baselines.evaluation.parallel import pin_threads
+
 from .settings import RunSettings
 
 __all__ = ["METADATA_KEY", "RunResult", "evaluate_policy_rows", "make_vec_env", "train"]
@@ -39,15 +41,6 @@ class RunResult:
     @property
     def interrupted(self) -> bool:
         return self.status.startswith("interrupted")
-
-
-def pin_threads() -> None:
-    """One thread for torch and BLAS: on a small shared CPU, SB3 runs faster that way."""
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
-    os.environ.setdefault("MKL_NUM_THREADS", "1")
-    import torch
-
-    torch.set_num_threads(1)
 
 
 def make_vec_env(settings: RunSettings, seed_offset: int = 0):
@@ -169,7 +162,7 @@ def train(
     caller (the CLI installs it first thing, so Ctrl-C during setup also stops cleanly); by
     default one is installed around learning.
     """
-    pin_threads()
+    pin_threads(load_torch=True)
     import stable_baselines3 as sb3
     from stable_baselines3.common.logger import CSVOutputFormat, Logger, TensorBoardOutputFormat
 

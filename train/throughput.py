@@ -23,6 +23,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from baselines.evaluation.parallel import pin_threads
+
 __all__ = ["main", "make_route"]
 
 ROUTES = ("native", "supersuit")
@@ -126,17 +128,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    pin_threads()
     args = build_parser().parse_args(argv)
     for name in ("n_uavs", "num_swarms", "steps", "env_steps", "repeats"):
         if getattr(args, name) < 1:
             raise SystemExit(
                 f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: must be >= 1"
             )
+    pin_threads(load_torch=True)
     import numpy as np
-    import torch
 
-    torch.set_num_threads(1)
     from baselines.evaluation.io import run_record, write_json
 
     from .settings import DEFAULT_HYPERPARAMETERS, parse_assignment

@@ -34,7 +34,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from baselines.evaluation.jobs import BACKENDS, pin_threads
+from baselines.evaluation.jobs import BACKENDS
+from baselines.evaluation.parallel import pin_threads
 
 __all__ = ["SUITES", "Suite", "build_parser", "main"]
 

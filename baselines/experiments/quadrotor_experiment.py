@@ -37,12 +37,12 @@ import os
 import sys
 import time
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from baselines.evaluation.parallel import imap_unordered, pin_threads
 from baselines.reporting.tables import stat_cell
 
 __all__ = [
@@ -83,11 +83,6 @@ SUMMARY_COLUMNS = (
     ("pair_accel_limited_frac", "pair at accel/tilt limit (%)", "{:.0f}"),
     ("crashed", "crashes", "{:.0f}"),
 )
-
-
-def _pin_threads() -> None:
-    for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
 
 
 def _window_mask(t: np.ndarray, windows) -> np.ndarray:
@@ -177,7 +172,7 @@ def run_job(
     record: bool,
 ) -> dict[str, Any]:
     """One (vehicle model, policy) combination over all seeds, batched in one core."""
-    _pin_threads()
+    pin_threads()
     from baselines.controllers import make_pair_policy
     from baselines.evaluation.rollout import rollout, trace_metrics
     from pairflock_env import make_config
@@ -491,7 +486,7 @@ def _parse_overrides(items: Sequence[str]) -> dict[str, Any]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    _pin_threads()
+    pin_threads()
     from tqdm import tqdm
 
     from baselines.controllers import POLICIES
@@ -528,16 +523,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     results: dict[tuple[str, str], dict[str, Any]] = {}
     bar = tqdm(total=len(combos), unit="job", desc="quadrotor experiment", disable=args.quiet)
     job_args = {c: (c[0], c[1], seeds, overrides, gains, record and c[1] != "zero") for c in combos}
-    if args.workers <= 1 or len(combos) == 1:
-        for c in combos:
-            results[c] = run_job(*job_args[c])
-            bar.update()
-    else:
-        with ProcessPoolExecutor(max_workers=min(args.workers, len(combos))) as pool:
-            futs = {pool.submit(run_job, *job_args[c]): c for c in combos}
-            for f in as_completed(futs):
-                results[futs[f]] = f.result()
-                bar.update()
+    for i, res in imap_unordered(run_job, [job_args[c] for c in combos], args.workers):
+        results[combos[i]] = res
+        bar.update()
     bar.close()
     sim_wall = time.perf_counter() - t0
 

@@ -11,7 +11,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from collections.abc import Sequence
 
@@ -123,8 +122,9 @@ def step_response(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    for var in ("OMP_NUM_THREADS", "NUMBA_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
+    from baselines.evaluation.parallel import pin_threads
+
+    pin_threads()
     ap = argparse.ArgumentParser(
         prog="python -m baselines.quadrotor_invariants", description=__doc__.split("\n\n")[0]
     )
