@@ -14,7 +14,7 @@ import pytest
 from baselines import POLICIES
 from baselines.benchmark import main
 from baselines.evaluation.specs import expand_scenarios, parse_policy, parse_scenario, slug
-from baselines.reporting.tables import load_traces
+from baselines.reporting.benchmark_figures import load_traces
 
 #: a tiny task: 8 UAVs, 2 s, so that each run is a fraction of a second
 TINY = ["--suite", "quick", "--n-uavs", "8", "--horizon", "2", "--seeds", "2", "--quiet"]

@@ -19,6 +19,11 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
+from baselines.reporting.criteria import learned_score
+
+#: the score the best model is kept by (:func:`baselines.reporting.criteria.learned_score`)
+eval_score = learned_score
+
 __all__ = [
     "CheckpointCallback",
     "EvalCallback",
@@ -53,23 +58,6 @@ def summarize_metrics(rows: list[dict[str, Any]]) -> dict[str, float]:
         out[name] = float(getattr(np, how)(v))
     out["band_never"] = float(sum(math.isnan(r["band_time"]) for r in rows))
     return out
-
-
-def eval_score(summary: dict[str, float]) -> float:
-    """Lower is better: the issue's acceptance targets as one number (0 = every target met).
-
-    ``max(0, median err - 0.05)/0.05 + max(0, max err - 0.1)/0.1 + max(0, band - 6)/6
-    + max(0, 1 - min separation)`` plus the median error itself as a tie-breaker.
-    """
-    band = summary["band_time_max"]
-    band_pen = 10.0 if not math.isfinite(band) else max(0.0, band - 6.0) / 6.0
-    return (
-        max(0.0, summary["ss_error_median"] - 0.05) / 0.05
-        + max(0.0, summary["ss_error_max"] - 0.1) / 0.1
-        + band_pen
-        + max(0.0, 1.0 - summary["min_separation_min"])
-        + summary["ss_error_median"]
-    )
 
 
 class GracefulInterrupt:

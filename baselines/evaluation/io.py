@@ -21,7 +21,9 @@ __all__ = [
     "atomic_path",
     "atomic_write_bytes",
     "atomic_write_text",
+    "dumps_stable",
     "format_value",
+    "json_rows",
     "run_record",
     "write_csv",
     "write_json",
@@ -71,6 +73,7 @@ def atomic_write_bytes(path: Path, data: bytes) -> Path:
 
 
 def atomic_write_text(path: Path, text: str) -> Path:
+    """Write ``text`` (UTF-8) to ``path`` atomically."""
     return atomic_write_bytes(path, text.encode("utf-8"))
 
 
@@ -88,6 +91,8 @@ def format_value(v: Any) -> Any:
 def write_csv(
     path: Path, rows: Sequence[Mapping[str, Any]], columns: Iterable[str] | None = None
 ) -> Path:
+    """``rows`` as CSV (cells by :func:`format_value`), atomically; ``columns`` default to
+    the keys of the first row."""
     columns = list(columns) if columns is not None else list(rows[0]) if rows else []
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n")
@@ -113,8 +118,22 @@ def _json_default(o: Any) -> Any:
 
 
 def write_json(path: Path, obj: Any) -> Path:
+    """``obj`` as indented JSON (sorted keys; numpy values as numbers), atomically."""
     text = json.dumps(obj, indent=2, sort_keys=True, default=_json_default, allow_nan=True)
     return atomic_write_text(path, text + "\n")
+
+
+def json_rows(rows: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Rows for JSON: NaN (a time never reached) becomes null."""
+    return [
+        {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in r.items()}
+        for r in rows
+    ]
+
+
+def dumps_stable(obj: Any) -> str:
+    """JSON text that is byte-identical for equal content (sorted keys, fixed layout)."""
+    return json.dumps(obj, indent=1, sort_keys=True, default=_json_default, allow_nan=False) + "\n"
 
 
 def _git_commit() -> str | None:

@@ -12,7 +12,8 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
-from baselines.reporting.tables import check_paper_claims, summarize
+from baselines.reporting.criteria import check_paper_claims
+from baselines.reporting.tables import summarize
 
 __all__ = ["check_paper_claims", "main", "summarize"]
 
