@@ -2,9 +2,10 @@
 
 Evaluation runs the policy in memory through ``baselines.evaluation.rollout.rollout`` (the
 rollout and metrics code of the paper reproduction and the benchmark), on the evaluation seeds,
-and logs it next to the analytic controllers (computed once per run). Checkpoints are taken at the
-start of a rollout, after the previous gradient update, where the model, the environment and
-the random generators together define the rest of the run exactly.
+and logs it next to the analytic controllers (computed once per run). Checkpoints and stops
+(Ctrl-C, time limit) happen at the start of a rollout, after the previous gradient update,
+where the model, the environment and the random generators together define the rest of the
+run exactly.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ __all__ = [
     "GracefulInterrupt",
     "ProgressCallback",
     "StopCallback",
+    "StopTraining",
     "eval_score",
     "summarize_metrics",
 ]
@@ -88,8 +90,17 @@ class GracefulInterrupt:
             self._previous = None
 
 
+class StopTraining(Exception):
+    """Raised by :class:`StopCallback` at a rollout boundary to end ``model.learn()`` there."""
+
+
 class StopCallback(BaseCallback):
-    """Stops learning on Ctrl-C (see :class:`GracefulInterrupt`) or after a wall-time limit."""
+    """Stops learning on Ctrl-C (see :class:`GracefulInterrupt`) or after a wall-time limit,
+    at the start of the next rollout: after the last gradient update, before any new step,
+    the point where a checkpoint continues exactly (so a stopped run, resumed, ends where an
+    uninterrupted one ends). SB3 lets a callback stop only from a step, one step into the
+    rollout, so it raises :class:`StopTraining` instead; :func:`train.run.train` catches it.
+    """
 
     def __init__(self, interrupt: GracefulInterrupt, time_limit_s: float | None, start: float):
         super().__init__()
@@ -98,13 +109,15 @@ class StopCallback(BaseCallback):
         self.start = start
         self.reason: str | None = None
 
-    def _on_step(self) -> bool:
+    def _on_rollout_start(self) -> None:
         if self.interrupt.requested:
             self.reason = "interrupted (Ctrl-C)"
-            return False
-        if self.time_limit_s is not None and time.perf_counter() - self.start > self.time_limit_s:
+        elif self.time_limit_s is not None and time.perf_counter() - self.start > self.time_limit_s:
             self.reason = f"time limit of {self.time_limit_s / 60:.1f} min reached"
-            return False
+        if self.reason is not None:
+            raise StopTraining(self.reason)
+
+    def _on_step(self) -> bool:
         return True
 
 
@@ -146,7 +159,7 @@ class ProgressCallback(BaseCallback):
             self.bar.set_postfix(self.postfix, refresh=True)
 
     def _on_training_end(self) -> None:
-        if self.bar is not None:
+        if self.bar is not None:  # also called after a stop (StopTraining)
             self.bar.update(self.num_timesteps - self.bar.n)
             self.bar.close()
             self.bar = None

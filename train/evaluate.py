@@ -51,7 +51,7 @@ def _task_overrides(model_path: Path) -> tuple[str, dict[str, Any]]:
         raise ValueError(f"{str(model_path)!r} has no training settings in its metadata")
     from train.settings import RunSettings
 
-    s = RunSettings(**settings)
+    s = RunSettings.from_dict(settings)
     return s.preset, s.eval_overrides()
 
 
