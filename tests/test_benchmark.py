@@ -302,3 +302,76 @@ def test_replot_redraws_from_files(figure_run):
     png.unlink()
     assert main(["--replot", str(figure_run), "--no-snapshots"]) == 0
     assert png.stat().st_size > 0
+
+
+def _result_files(out: Path) -> dict[str, bytes]:
+    """The result set in ``out`` (run.json aside: it holds timestamps)."""
+    return {p.name: p.read_bytes() for p in out.iterdir() if p.is_file() and p.name != "run.json"}
+
+
+def test_a_killed_rerun_leaves_the_old_set_or_a_marked_folder(tmp_path):
+    """SIGKILL a rerun into a finished folder while it writes: the folder holds the old set
+    untouched (or, had it got that far, the new set), never new results beside an old
+    summary; a later run cleans up after the killed one."""
+    import signal
+    import time
+
+    out = tmp_path / "res"
+    assert _cli([*TINY, "-p", "smc", "--workers", "1", "--out", str(out)], tmp_path).returncode == 0
+    old = _result_files(out)
+    rerun = [*TINY, "-p", "smc", "zero", "--seeds", "3", "--workers", "1", "--out", str(out)]
+    env = dict(os.environ, OMP_NUM_THREADS="1", MPLBACKEND="Agg")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "baselines.benchmark", *rerun],
+        cwd=tmp_path,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        deadline = time.time() + 120
+        while time.time() < deadline and proc.poll() is None and not list(out.glob(".partial-*")):
+            time.sleep(0.005)
+        proc.send_signal(signal.SIGKILL)  # it has started writing its results
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == -signal.SIGKILL, "the rerun finished before it could be killed"
+    killed, leftover = _result_files(out), list(out.glob(".partial-*"))
+    assert _cli(rerun, tmp_path).returncode == 0
+    new = _result_files(out)
+    assert new != old
+    assert killed in (old, new) or "INCOMPLETE" in killed
+    if killed == old:  # killed while writing aside: its hidden staging folder is left
+        assert leftover
+    assert not list(out.glob(".partial-*")) and "INCOMPLETE" not in new
+
+
+def test_an_interrupted_swap_marks_the_folder_incomplete(tmp_path, monkeypatch, capsys):
+    """If the swap of the new set into the folder fails midway, ``INCOMPLETE`` says so (and
+    --replot refuses the folder) until a run completes."""
+    out = tmp_path / "res"
+    assert main([*TINY, "-p", "smc", "--workers", "1", "--out", str(out)]) == 0
+    replace = os.replace
+
+    def failing_replace(src, dst):
+        into_folder = ".partial-" in str(src) and ".partial-" not in str(dst)
+        if into_folder and Path(dst).name == "summary.md":  # the swap, half done
+            raise OSError("disk full")
+        return replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", failing_replace)
+    with pytest.raises(OSError, match="disk full"):
+        main([*TINY, "-p", "smc", "zero", "--workers", "1", "--out", str(out)])
+    monkeypatch.setattr(os, "replace", replace)
+    assert "rewritten by process" in (out / "INCOMPLETE").read_text()
+    with pytest.raises(SystemExit):
+        main(["--replot", str(out)])
+    assert "INCOMPLETE" in capsys.readouterr().err
+    assert main([*TINY, "-p", "smc", "zero", "--workers", "1", "--out", str(out)]) == 0
+    assert not (out / "INCOMPLETE").exists()
+    figs = {p.name for p in out.glob("*.png")}
+    assert "snapshots_nominal_smc.png" in figs
+    listed = json.loads((out / "run.json").read_text())["outputs"]
+    assert sorted(p.name for p in out.iterdir() if p.is_file() and p.name != "run.json") == listed

@@ -237,7 +237,13 @@ def _summary(model: Path, seeds: list[int], table: str, checks) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m train.evaluate`` / ``pairflock-evaluate``; returns the exit status."""
     pin_threads()
-    from baselines.evaluation.io import atomic_write_text, run_record, write_csv, write_json
+    from baselines.evaluation.io import (
+        atomic_write_text,
+        result_folder,
+        run_record,
+        write_csv,
+        write_json,
+    )
     from baselines.reporting.criteria import all_passed, criteria_lines
 
     parser = build_parser()
@@ -250,18 +256,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     rows = _run(args, policies, seeds, extra)
     table = summary_table(rows, policies)
     checks = check_learned(rows)
-    write_csv(out / "results.csv", rows)
-    atomic_write_text(out / "summary.md", _summary(args.model, seeds, table, checks))
-    record = run_record(
-        model=str(args.model),
-        seeds=seeds,
-        n_uavs=args.n_uavs,
-        init=args.init,
-        policies=policies,
-        extra_overrides=extra,
-        wall_s=round(time.perf_counter() - t0, 1),
-    )
-    write_json(out / "run.json", record)
+    with result_folder(out) as folder:  # complete and consistent, or marked INCOMPLETE
+        write_csv(folder / "results.csv", rows)
+        atomic_write_text(folder / "summary.md", _summary(args.model, seeds, table, checks))
+        record = run_record(
+            model=str(args.model),
+            seeds=seeds,
+            n_uavs=args.n_uavs,
+            init=args.init,
+            policies=policies,
+            extra_overrides=extra,
+            wall_s=round(time.perf_counter() - t0, 1),
+            outputs=["results.csv", "summary.md"],
+        )
+        write_json(folder / "run.json", record)
     print(table)
     for line in criteria_lines(checks):
         print(line)

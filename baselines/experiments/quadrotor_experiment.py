@@ -265,7 +265,7 @@ def _run_json(args, seeds, overrides, gains, results, sim_wall, total) -> dict[s
 
 def main(argv: Sequence[str] | None = None) -> int:
     """The experiment CLI (``python -m baselines.quadrotor_experiment``); the exit status."""
-    from baselines.evaluation.io import atomic_write_text, write_csv, write_json
+    from baselines.evaluation.io import atomic_write_text, result_folder, write_csv, write_json
     from baselines.reporting.criteria import all_passed, criteria_lines
     from baselines.reporting.quadrotor_figures import figure_set
 
@@ -279,15 +279,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     keys = sorted(results, key=_order)
     rows = [r for k in keys for r in results[k]["rows"]]
     out = args.out
-    write_csv(out / "results.csv", rows, list(rows[0]))
     checks = check_quadrotor(rows)
-    md = _summary(rows, results, keys, seeds, overrides, gains, checks)
-    atomic_write_text(out / "summary.md", md)
-    fig_paths = []
-    if not args.no_figures:
-        fig_paths = figure_set(results, out, args.dpi, STRAIGHT_WINDOWS, QUADROTOR.band)
-    total = time.perf_counter() - t0
-    write_json(out / "run.json", _run_json(args, seeds, overrides, gains, results, sim_wall, total))
+    with result_folder(out) as folder:  # complete and consistent, or marked INCOMPLETE
+        write_csv(folder / "results.csv", rows, list(rows[0]))
+        md = _summary(rows, results, keys, seeds, overrides, gains, checks)
+        atomic_write_text(folder / "summary.md", md)
+        fig_paths = []
+        if not args.no_figures:
+            fig_paths = figure_set(results, folder, args.dpi, STRAIGHT_WINDOWS, QUADROTOR.band)
+        total = time.perf_counter() - t0
+        record = _run_json(args, seeds, overrides, gains, results, sim_wall, total)
+        names = ["results.csv", "summary.md", *(str(f.relative_to(folder)) for f in fig_paths)]
+        write_json(folder / "run.json", {**record, "outputs": sorted(names)})
     print(summarize(rows))
     if checks:
         print("\n" + "\n".join(criteria_lines(checks)))

@@ -131,15 +131,28 @@ def _write_results(out: Path, plan: Plan, res: Results, sc_records, pol_records)
     atomic_write_text(out / "results.json", dumps_stable(record))
 
 
-def _write_video(out: Path, plan: Plan, res: Results, args) -> Path:
+def _video_path(out: Path, folder: Path, plan: Plan, res: Results, args) -> tuple[Path, Path]:
+    """(where to write the video, where it ends up): inside ``out`` it goes through the
+    staging ``folder`` like every other result file."""
     from baselines.evaluation.specs import slug
+
+    i, j = plan.video
+    seed = res.traces[i, j]["seed"]
+    if args.video == "auto":
+        name = f"episode_{slug(plan.scenarios[i].label)}_{slug(plan.specs[j].label)}_seed{seed}.mp4"
+        return folder / name, out / name
+    final = Path(args.video)
+    if final.resolve().is_relative_to(out.resolve()):
+        return folder / final.resolve().relative_to(out.resolve()), final
+    return final, final
+
+
+def _write_video(path: Path, plan: Plan, res: Results, args) -> Path:
     from baselines.reporting.video import write_episode_video
 
     i, j = plan.video
     tr, cfg = res.traces[i, j], plan.configs[i]
     sc, spec = plan.scenarios[i], plan.specs[j]
-    name = f"episode_{slug(sc.label)}_{slug(spec.label)}_seed{tr['seed']}.mp4"
-    path = out / name if args.video == "auto" else Path(args.video)
     return write_episode_video(
         path,
         tr["frame_t"],
@@ -187,38 +200,53 @@ def _run_record(plan: Plan, res: Results, args, records, outputs, total_s: float
 
 
 def _write_all(plan: Plan, res: Results, args, t0: float):
-    """Every output file; returns (checks, figure paths, video path, total seconds)."""
-    from baselines.evaluation.io import atomic_write_text, write_json
+    """Every output file, through a staging folder (:func:`~baselines.evaluation.io.
+    result_folder`); returns (checks, figure paths, video path, total seconds)."""
+    from baselines.evaluation.io import atomic_write_text, result_folder, write_json
     from baselines.reporting import benchmark_figures, criteria
 
     out = plan.out
     records = _records(plan)
-    _write_results(out, plan, res, *records)
     checks = []
     if (plan.suite.check or args.check) and plan.preset == "paper":
         checks = criteria.check_paper_claims(res.rows)
-    fig_paths: list[Path] = []
-    if plan.figures:
-        benchmark_figures.save_traces(out / "traces.npz", res.traces)
-        labels = [s.label for s in plan.specs]
-        fig_paths = benchmark_figures.make_figures(
-            out, res.rows, res.traces, records[0], labels, snapshots=plan.snapshots
-        )
-    video_path = _write_video(out, plan, res, args) if plan.video is not None else None
-    atomic_write_text(out / "summary.md", summary_markdown(plan, res.rows, checks, fig_paths))
-    total_s = time.perf_counter() - t0
-    files = [out / "results.csv", out / "results.json", out / "summary.md", *fig_paths]
-    files += [video_path] if video_path else []
-    outputs = sorted(str(p.relative_to(out)) for p in files if Path(p).is_relative_to(out))
-    write_json(out / "run.json", _run_record(plan, res, args, records, outputs, total_s))
-    return checks, fig_paths, video_path, total_s
+    with result_folder(out) as folder:
+        _write_results(folder, plan, res, *records)
+        names = ["results.csv", "results.json", "summary.md"]
+        fig_names: list[str] = []
+        if plan.figures:
+            benchmark_figures.save_traces(folder / "traces.npz", res.traces)
+            labels = [s.label for s in plan.specs]
+            figs = benchmark_figures.make_figures(
+                folder, res.rows, res.traces, records[0], labels, snapshots=plan.snapshots
+            )
+            fig_names = [str(p.relative_to(folder)) for p in figs]
+            names += ["traces.npz", *fig_names]
+        video_path = None
+        if plan.video is not None:
+            write_to, video_path = _video_path(out, folder, plan, res, args)
+            _write_video(write_to, plan, res, args)
+            if write_to.is_relative_to(folder):
+                names.append(str(write_to.relative_to(folder)))
+        md = summary_markdown(plan, res.rows, checks, [out / n for n in fig_names])
+        atomic_write_text(folder / "summary.md", md)
+        total_s = time.perf_counter() - t0
+        record = _run_record(plan, res, args, records, sorted(names), total_s)
+        write_json(folder / "run.json", record)
+    return checks, [out / n for n in fig_names], video_path, total_s
 
 
 def replot(args, parser) -> int:
     """``--replot DIR``: redraw the figures of a finished run from its files."""
+    from baselines.evaluation.io import INCOMPLETE_MARKER
     from baselines.reporting.benchmark_figures import load_traces, make_figures
 
     d = args.replot
+    if (d / INCOMPLETE_MARKER).exists():
+        parser.error(
+            f"--replot {str(d)!r}: the folder is marked {INCOMPLETE_MARKER} (a run was "
+            "interrupted while writing it); rerun the benchmark"
+        )
     try:
         res = json.loads((d / "results.json").read_text())
     except FileNotFoundError:
