@@ -317,7 +317,7 @@ def test_a_killed_rerun_leaves_the_old_set_or_a_marked_folder(tmp_path):
     import time
 
     out = tmp_path / "res"
-    assert _cli([*TINY, "-p", "smc", "--workers", "1", "--out", str(out)], tmp_path).returncode == 0
+    assert main([*TINY, "-p", "smc", "--workers", "1", "--out", str(out)]) == 0
     old = _result_files(out)
     rerun = [*TINY, "-p", "smc", "zero", "--seeds", "3", "--workers", "1", "--out", str(out)]
     env = dict(os.environ, OMP_NUM_THREADS="1", MPLBACKEND="Agg")
@@ -339,7 +339,7 @@ def test_a_killed_rerun_leaves_the_old_set_or_a_marked_folder(tmp_path):
             proc.kill()
     assert proc.returncode == -signal.SIGKILL, "the rerun finished before it could be killed"
     killed, leftover = _result_files(out), list(out.glob(".partial-*"))
-    assert _cli(rerun, tmp_path).returncode == 0
+    assert main(rerun) == 0
     new = _result_files(out)
     assert new != old
     assert killed in (old, new) or "INCOMPLETE" in killed
