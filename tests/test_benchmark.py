@@ -375,3 +375,19 @@ def test_an_interrupted_swap_marks_the_folder_incomplete(tmp_path, monkeypatch, 
     assert "snapshots_nominal_smc.png" in figs
     listed = json.loads((out / "run.json").read_text())["outputs"]
     assert sorted(p.name for p in out.iterdir() if p.is_file() and p.name != "run.json") == listed
+
+
+def test_set_values_are_numbers_as_written():
+    """The benchmark's and the quadrotor experiment's --set read ``1e-3``/``5e1`` as numbers
+    (the parser every CLI shares, :func:`baselines.evaluation.specs.parse_value`)."""
+    from baselines.experiments.benchmark import build_parser, resolve
+    from baselines.experiments.quadrotor_experiment import _settings
+    from baselines.experiments.quadrotor_experiment import build_parser as quad_parser
+
+    parser = build_parser()
+    args = parser.parse_args([*TINY, "-p", "smc", "--set", "dt=1e-2,5e-3", "--set", "d_m=5e0"])
+    plan = resolve(args, parser)
+    assert [c.dt for c in plan.configs] == [0.01, 0.005] and plan.configs[0].d_m == (5.0,)
+    args = quad_parser().parse_args(["--set", "quad_motor_time_constant=2e-2", "--seeds", "1"])
+    overrides, _ = _settings(args)
+    assert overrides == {"quad_motor_time_constant": 0.02}

@@ -454,7 +454,7 @@ def test_ctrl_c_mid_rollout_resumes_to_the_uninterrupted_end(tmp_path, monkeypat
     assert strip(ea) == strip(eb)  # the same evaluations at the same steps (wall time aside)
 
 
-def test_values_are_read_as_written_in_every_cli(tmp_path):
+def test_values_are_read_as_written_by_the_train_cli(tmp_path):
     """``1e-3``/``5e1`` are numbers on the command line and in settings files (YAML 1.1
     alone reads them as text); one parser serves train, benchmark, quadrotor, evaluate."""
     from baselines.evaluation.specs import parse_value
