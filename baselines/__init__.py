@@ -7,16 +7,25 @@
 Names: ``"smc"`` (sliding mode, eq. 28), ``"proportional"`` (eq. 44), ``"zero"`` (flocking
 only), ``"sb3:<path>"`` (a model trained with ``python -m train``). Gains are keyword
 arguments (``make_pair_policy("smc", env, k=200)``).
+
+The package has four layers, each importing only the ones before it:
+
+* :mod:`baselines.controllers` - the controllers and their registry (re-exported here);
+* :mod:`baselines.evaluation` - batched rollouts, jobs and their backends, CLI specs, files;
+* :mod:`baselines.reporting` - tables, acceptance criteria, figures, video;
+* :mod:`baselines.experiments` - the CLIs (``python -m baselines.benchmark``, ``reproduce``,
+  ``quadrotor_experiment``, ``quadrotor_invariants``).
+
+The controller names are loaded on first use, so that importing a submodule (e.g. the
+thread pinning of :mod:`baselines.evaluation.parallel`) does not load numpy first.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import importlib
 from typing import Any
 
-from .policies import PairPolicy, ZeroPolicy, resolve_env
-from .proportional import ProportionalController
-from .sliding_mode import SlidingModeController
+from ._moved import install_aliases
 
 __all__ = [
     "POLICIES",
@@ -28,47 +37,14 @@ __all__ = [
     "resolve_env",
 ]
 
-
-def _sb3_policy(path: str, env: Any, **gains: Any) -> Any:
-    """``"sb3:<path>"``: a model saved by ``python -m train`` (imports SB3/torch lazily)."""
-    from .sb3_policy import load_sb3_policy
-
-    return load_sb3_policy(path, env, **gains)
+install_aliases()
 
 
-#: name -> factory(env, **gains); a prefix entry "name:" takes the text after the colon
-POLICIES: dict[str, Callable[..., Any]] = {
-    "smc": SlidingModeController,
-    "proportional": ProportionalController,
-    "zero": ZeroPolicy,
-    "sb3:": _sb3_policy,
-}
+def __getattr__(name: str) -> Any:
+    if name in __all__:
+        return getattr(importlib.import_module("baselines.controllers"), name)
+    raise AttributeError(f"module 'baselines' has no attribute {name!r}")
 
 
-def make_pair_policy(name: str, env: Any, **gains: Any) -> Any:
-    """Build a pair controller by name for ``env`` (any pairflock view, core or config).
-
-    The result has SB3's ``predict(observation, state=None, episode_start=None,
-    deterministic=True) -> (action, state)`` and acts per agent from that agent's
-    observation.
-    """
-    if not isinstance(name, str):
-        raise TypeError(f"name={name!r} is invalid: must be a string such as 'smc'")
-    if ":" in name:
-        prefix, arg = name.split(":", 1)
-        factory = POLICIES.get(prefix + ":")
-        if factory is None:
-            raise ValueError(
-                f"name={name!r} is invalid: unknown prefix {prefix!r}; valid: "
-                f"{', '.join(sorted(POLICIES))}"
-            )
-        return factory(arg, env, **gains)
-    if name not in POLICIES:
-        import difflib
-
-        hint = difflib.get_close_matches(name, list(POLICIES), n=1)
-        extra = f" (did you mean {hint[0]!r}?)" if hint else ""
-        raise ValueError(
-            f"name={name!r} is invalid{extra}: must be one of {', '.join(sorted(POLICIES))}"
-        )
-    return POLICIES[name](env, **gains)
+def __dir__() -> list[str]:
+    return sorted([*globals(), *__all__])

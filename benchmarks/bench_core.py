@@ -11,19 +11,19 @@ Everything runs on one thread (numba kernels are single-threaded; OMP/MKL pinned
 
 from __future__ import annotations
 
-import os
+from baselines.evaluation.parallel import pin_threads
 
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-os.environ.setdefault("MKL_NUM_THREADS", "1")
+pin_threads()  # one thread for OpenMP/MKL/OpenBLAS/numba, before numpy loads
 
-import argparse
-import platform
+import argparse  # noqa: E402
+import os  # noqa: E402
+import platform  # noqa: E402
 
-import numpy as np
-from _timing import median_rate, print_breakdown
+import numpy as np  # noqa: E402
+from _timing import median_rate, print_breakdown  # noqa: E402
 
-from pairflock_env import PairFlockCore, make_config, parallel_env
-from pairflock_env.flocking import flocking_pass, pair_pass
+from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
+from pairflock_env.flocking import flocking_pass, pair_pass  # noqa: E402
 
 
 def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:

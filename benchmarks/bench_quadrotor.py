@@ -13,12 +13,12 @@ numpy is imported (nothing here imports torch).
 
 from __future__ import annotations
 
-import os
+from baselines.evaluation.parallel import pin_threads
 
-for _var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+pin_threads()  # one thread for OpenMP/MKL/OpenBLAS/numba, before numpy loads
 
 import argparse  # noqa: E402
+import os  # noqa: E402
 import platform  # noqa: E402
 
 import numpy as np  # noqa: E402

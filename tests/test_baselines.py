@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from baselines import make_pair_policy
-from baselines.rollout import rollout, trace_metrics
+from baselines.evaluation.rollout import rollout, trace_metrics
 from pairflock_env import PairFlockCore, make_config, parallel_env
 
 
@@ -109,7 +109,7 @@ def test_make_pair_policy_rejects_bad_names_and_gains():
     cfg = make_config("paper", n_uavs=12)
     with pytest.raises(ValueError, match="'smc'"):
         make_pair_policy("smcc", cfg)
-    with pytest.raises(ValueError, match="unknown gain"):
+    with pytest.raises(TypeError, match=r"unknown gain.*did you mean 'k'"):
         make_pair_policy("smc", cfg, kk=3)
     with pytest.raises(ValueError, match="k="):
         make_pair_policy("smc", cfg, k=-1.0)
@@ -120,3 +120,53 @@ def test_make_pair_policy_rejects_bad_names_and_gains():
     pol = make_pair_policy("smc", cfg)
     with pytest.raises(ValueError, match="observation has shape"):
         pol.predict(np.zeros(3))
+
+
+@pytest.mark.parametrize(
+    "name, gain",
+    [("smc", g) for g in ("c", "k", "a", "b", "boundary_layer")] + [("proportional", "k_p")],
+)
+def test_every_gain_is_checked_and_named(name, gain):
+    cfg = make_config("paper", n_uavs=12)
+    for bad, error in (
+        ("a", TypeError),
+        ([1.0], TypeError),
+        (True, TypeError),
+        (np.nan, ValueError),
+        (np.inf, ValueError),
+        (-1.0, ValueError),
+    ):
+        with pytest.raises(error, match=f"{gain}="):
+            make_pair_policy(name, cfg, **{gain: bad})
+    pol = make_pair_policy(name, cfg, **{gain: 2})  # an int is a number
+    assert isinstance(pol.gains[gain], float)
+
+
+def _controllers(env):
+    """The analytic controllers and, where SB3 is installed, the committed learned one."""
+    import importlib.util
+    from pathlib import Path
+
+    yield from (make_pair_policy(n, env) for n in ("smc", "proportional", "zero"))
+    if importlib.util.find_spec("stable_baselines3") is not None:
+        model = Path(__file__).resolve().parents[1] / "models" / "pair_n20_a50.zip"
+        yield make_pair_policy(f"sb3:{model}", env)
+
+
+def test_predict_rejects_non_finite_and_non_numeric_observations():
+    """Every controller, analytic or learned: NaN/inf raises ValueError (never a NaN
+    action), strings a TypeError, both naming the observation."""
+    env = parallel_env(preset="paper", n_uavs=20, obs_neighbors=12)  # the learned one's task
+    obs, _ = env.reset(seed=0)
+    batch = np.stack(list(obs.values()))
+    for pol in _controllers(env):
+        assert np.isfinite(pol.predict(batch)[0]).all()
+        for bad in (np.nan, np.inf, -np.inf):
+            x = batch.copy()
+            x[1, 3] = bad
+            with pytest.raises(ValueError, match=r"observation holds NaN or inf \(rows \[1\]\)"):
+                pol.predict(x)
+            with pytest.raises(ValueError, match="NaN or inf"):
+                pol.predict(x[1])
+        with pytest.raises(TypeError, match="observation is invalid"):
+            pol.predict(np.full(batch.shape[-1], "a"))

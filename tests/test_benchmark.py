@@ -13,8 +13,8 @@ import pytest
 
 from baselines import POLICIES
 from baselines.benchmark import main
-from baselines.report import load_traces
-from baselines.specs import expand_scenarios, parse_policy, parse_scenario, slug
+from baselines.evaluation.specs import expand_scenarios, parse_policy, parse_scenario, slug
+from baselines.reporting.benchmark_figures import load_traces
 
 #: a tiny task: 8 UAVs, 2 s, so that each run is a fraction of a second
 TINY = ["--suite", "quick", "--n-uavs", "8", "--horizon", "2", "--seeds", "2", "--quiet"]
@@ -302,3 +302,92 @@ def test_replot_redraws_from_files(figure_run):
     png.unlink()
     assert main(["--replot", str(figure_run), "--no-snapshots"]) == 0
     assert png.stat().st_size > 0
+
+
+def _result_files(out: Path) -> dict[str, bytes]:
+    """The result set in ``out`` (run.json aside: it holds timestamps)."""
+    return {p.name: p.read_bytes() for p in out.iterdir() if p.is_file() and p.name != "run.json"}
+
+
+def test_a_killed_rerun_leaves_the_old_set_or_a_marked_folder(tmp_path):
+    """SIGKILL a rerun into a finished folder while it writes: the folder holds the old set
+    untouched (or, had it got that far, the new set), never new results beside an old
+    summary; a later run cleans up after the killed one."""
+    import signal
+    import time
+
+    out = tmp_path / "res"
+    assert main([*TINY, "-p", "smc", "--workers", "1", "--out", str(out)]) == 0
+    old = _result_files(out)
+    rerun = [*TINY, "-p", "smc", "zero", "--seeds", "3", "--workers", "1", "--out", str(out)]
+    env = dict(os.environ, OMP_NUM_THREADS="1", MPLBACKEND="Agg")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "baselines.benchmark", *rerun],
+        cwd=tmp_path,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        deadline = time.time() + 120
+        while time.time() < deadline and proc.poll() is None and not list(out.glob(".partial-*")):
+            time.sleep(0.005)
+        proc.send_signal(signal.SIGKILL)  # it has started writing its results
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == -signal.SIGKILL, "the rerun finished before it could be killed"
+    killed, leftover = _result_files(out), list(out.glob(".partial-*"))
+    assert main(rerun) == 0
+    new = _result_files(out)
+    assert new != old
+    assert killed in (old, new) or "INCOMPLETE" in killed
+    if killed == old:  # killed while writing aside: its hidden staging folder is left
+        assert leftover
+    assert not list(out.glob(".partial-*")) and "INCOMPLETE" not in new
+
+
+def test_an_interrupted_swap_marks_the_folder_incomplete(tmp_path, monkeypatch, capsys):
+    """If the swap of the new set into the folder fails midway, ``INCOMPLETE`` says so (and
+    --replot refuses the folder) until a run completes."""
+    out = tmp_path / "res"
+    assert main([*TINY, "-p", "smc", "--workers", "1", "--out", str(out)]) == 0
+    replace = os.replace
+
+    def failing_replace(src, dst):
+        into_folder = ".partial-" in str(src) and ".partial-" not in str(dst)
+        if into_folder and Path(dst).name == "summary.md":  # the swap, half done
+            raise OSError("disk full")
+        return replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", failing_replace)
+    with pytest.raises(OSError, match="disk full"):
+        main([*TINY, "-p", "smc", "zero", "--workers", "1", "--out", str(out)])
+    monkeypatch.setattr(os, "replace", replace)
+    assert "rewritten by process" in (out / "INCOMPLETE").read_text()
+    with pytest.raises(SystemExit):
+        main(["--replot", str(out)])
+    assert "INCOMPLETE" in capsys.readouterr().err
+    assert main([*TINY, "-p", "smc", "zero", "--workers", "1", "--out", str(out)]) == 0
+    assert not (out / "INCOMPLETE").exists()
+    figs = {p.name for p in out.glob("*.png")}
+    assert "snapshots_nominal_smc.png" in figs
+    listed = json.loads((out / "run.json").read_text())["outputs"]
+    assert sorted(p.name for p in out.iterdir() if p.is_file() and p.name != "run.json") == listed
+
+
+def test_set_values_are_numbers_as_written():
+    """The benchmark's and the quadrotor experiment's --set read ``1e-3``/``5e1`` as numbers
+    (the parser every CLI shares, :func:`baselines.evaluation.specs.parse_value`)."""
+    from baselines.experiments.benchmark import build_parser, resolve
+    from baselines.experiments.quadrotor_experiment import _settings
+    from baselines.experiments.quadrotor_experiment import build_parser as quad_parser
+
+    parser = build_parser()
+    args = parser.parse_args([*TINY, "-p", "smc", "--set", "dt=1e-2,5e-3", "--set", "d_m=5e0"])
+    plan = resolve(args, parser)
+    assert [c.dt for c in plan.configs] == [0.01, 0.005] and plan.configs[0].d_m == (5.0,)
+    args = quad_parser().parse_args(["--set", "quad_motor_time_constant=2e-2", "--seeds", "1"])
+    overrides, _ = _settings(args)
+    assert overrides == {"quad_motor_time_constant": 0.02}

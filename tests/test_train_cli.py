@@ -188,7 +188,7 @@ def test_cli_smoke_run_writes_a_complete_run_directory(tmp_path):
     assert steps[0] < 128 and steps[-1] == 256  # initial policy, periodic, final
     # the saved policy plugs into the action slot and runs the baselines' rollout
     from baselines import make_pair_policy
-    from baselines.rollout import rollout, trace_metrics
+    from baselines.evaluation.rollout import rollout, trace_metrics
     from pairflock_env import make_config
 
     cfg = make_config("paper", n_uavs=8, pair_accel_limit=50.0, horizon=0.3)
@@ -388,3 +388,144 @@ def test_linear_schedules_decay_to_zero():
     hp = resolve_schedules({"learning_rate": "lin_3e-4", "clip_range": 0.2, "n_steps": 8})
     assert hp["learning_rate"](1.0) == 3e-4 and hp["learning_rate"](0.0) == 0.0
     assert hp["learning_rate"](0.5) == pytest.approx(1.5e-4) and hp["clip_range"] == 0.2
+
+
+def _tree(run: Path) -> dict[str, tuple[bytes, int]]:
+    """Every file under ``run``: its bytes and modification time (ns)."""
+    return {
+        str(p.relative_to(run)): (p.read_bytes(), p.stat().st_mtime_ns)
+        for p in sorted(run.rglob("*"))
+        if p.is_file()
+    }
+
+
+def test_resume_of_a_finished_run_says_so_and_changes_nothing(tmp_path, capsys):
+    from train.cli import main
+    from train.run import train
+
+    run = tmp_path / "done"
+    res = train(_settings(total_steps=64, eval_every=0, checkpoint_every=0), run, quiet=True)
+    assert res.status == "completed"
+    before = _tree(run)
+    assert main(["--resume", str(run)]) == 0
+    out = capsys.readouterr().out
+    assert "is complete" in out and "nothing changed" in out and "64" in out
+    assert _tree(run) == before  # no file written, rewritten or added
+    # a higher target continues the same run
+    assert main(["--resume", str(run), "--total-steps", "128", "--quiet"]) == 0
+    assert json.loads((run / "run_resumed_000000000064.json").read_text())["num_timesteps"] == 128
+
+
+def test_ctrl_c_mid_rollout_resumes_to_the_uninterrupted_end(tmp_path, monkeypatch):
+    """SIGINT in the middle of a rollout: the run stops at the next rollout boundary, and the
+    resumed run ends at the same step, with the same parameters, as an uninterrupted one."""
+    import train.run as run_mod
+
+    s = _settings(seed=5, total_steps=512, eval_every=128, checkpoint_every=0)
+    full = run_mod.train(s, tmp_path / "full", quiet=True)
+    rollout_steps = 16 * 4  # n_steps x rows (2 swarms x 2 paired UAVs)
+
+    make = run_mod.make_vec_env
+
+    def make_interrupting(settings, seed_offset=0):
+        venv = make(settings, seed_offset)
+        step_wait, calls = venv.step_wait, [0]
+
+        def interrupting_step_wait():
+            calls[0] += 1
+            if calls[0] == 40:  # vector step 40: the middle of the third rollout (16 each)
+                os.kill(os.getpid(), signal.SIGINT)
+            return step_wait()
+
+        venv.step_wait = interrupting_step_wait
+        return venv
+
+    monkeypatch.setattr(run_mod, "make_vec_env", make_interrupting)
+    part = tmp_path / "part"
+    stopped = run_mod.train(s, part, quiet=True)
+    assert stopped.interrupted and stopped.num_timesteps == 3 * rollout_steps
+    monkeypatch.setattr(run_mod, "make_vec_env", make)
+    resumed = run_mod.train(s, part, resume=part, quiet=True)
+    assert resumed.num_timesteps == full.num_timesteps == 512
+    _assert_same_params(tmp_path / "full" / "final_model.zip", part / "final_model.zip")
+    ea = (tmp_path / "full" / "eval.csv").read_text().splitlines()
+    eb = (part / "eval.csv").read_text().splitlines()
+    strip = lambda lines: [",".join(x for i, x in enumerate(r.split(",")) if i != 1) for r in lines]  # noqa: E731
+    assert strip(ea) == strip(eb)  # the same evaluations at the same steps (wall time aside)
+
+
+def test_values_are_read_as_written_by_the_train_cli(tmp_path):
+    """``1e-3``/``5e1`` are numbers on the command line and in settings files (YAML 1.1
+    alone reads them as text); one parser serves train, benchmark, quadrotor, evaluate."""
+    from baselines.evaluation.specs import parse_value
+    from train.cli import _new_settings, build_parser
+
+    parser = build_parser()
+    args = parser.parse_args(
+        [
+            *TINY,
+            "--set",
+            "dt=1e-2",
+            "--set",
+            "pair_accel_limit=5e1",
+            "--interface-param",
+            "w_band=1e-1",
+            "--hp",
+            "learning_rate=1e-3",
+            "--hp",
+            "policy_kwargs={net_arch: [8, 8]}",
+            "--out",
+            str(tmp_path / "x"),
+        ]
+    )
+    s = _new_settings(args, parser)
+    assert s.env["dt"] == 0.01 and s.env["pair_accel_limit"] == 50.0
+    assert s.interface_params["w_band"] == 0.1 and s.hyperparameters["learning_rate"] == 1e-3
+    assert s.hyperparameters["policy_kwargs"] == {"net_arch": [8, 8]}
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("hyperparameters: {learning_rate: 1e-3}\nenv: {pair_accel_limit: 5e1}\n")
+    from train.settings import load_yaml
+
+    assert load_yaml(cfg) == {
+        "hyperparameters": {"learning_rate": 1e-3},
+        "env": {"pair_accel_limit": 50.0},
+    }
+    assert [parse_value(t) for t in ("1e-3", "5e1", "20", ".5", "1_000", "lin_3e-4", "none")] == [
+        1e-3,
+        50.0,
+        20,
+        0.5,
+        1000,
+        "lin_3e-4",
+        None,
+    ]
+    # ... and the SB3 model gets a float learning rate (this crashed as the text '1e-3')
+    from train.run import train
+
+    flags = {"hyperparameters": {**s.hyperparameters, "policy_kwargs": {"net_arch": [8]}}}
+    small = _settings(total_steps=64, eval_every=0, checkpoint_every=0, **flags)
+    assert train(small, tmp_path / "lr", quiet=True).status == "completed"
+
+
+def test_old_interface_names_still_load(tmp_path):
+    """``frame``/``frame_params`` (settings files, RunSettings, --frame-param) are the old
+    names of ``interface``/``interface_params``; the committed model's metadata loads."""
+    from train.evaluate import _task_overrides
+    from train.settings import RunSettings, load_yaml, settings_from_sources
+
+    old = tmp_path / "old.yaml"
+    old.write_text("frame: pair\nframe_params: {w_band: 0.2}\nenv: {n_uavs: 8}\n")
+    with pytest.warns(FutureWarning) as notes:
+        data = load_yaml(old)
+    assert {"'frame' is deprecated", "'frame_params' is deprecated"} <= {
+        str(n.message).split(": ", 1)[1].split(";")[0] for n in notes
+    }
+    assert data["interface"] == "pair" and data["interface_params"] == {"w_band": 0.2}
+    s = settings_from_sources(data, {"eval_baselines": []})
+    assert s.interface_params == {"w_band": 0.2}
+    with pytest.warns(DeprecationWarning, match="frame"):
+        assert RunSettings(frame="world").interface == "world"
+    with pytest.raises(ValueError, match="same setting"):
+        RunSettings.from_dict({"frame": "pair", "interface": "world"})
+    preset, over = _task_overrides(ROOT / "models" / "pair_n20_a50.zip")
+    assert preset == "paper" and over["pair_accel_limit"] == 50.0

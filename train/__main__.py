@@ -1,12 +1,11 @@
 """``python -m train``: see :mod:`train.cli`."""
 
-import os
 import sys
 
-# one BLAS/OpenMP thread before numpy and torch load (SB3 is ~3x faster so on 2 cores)
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-os.environ.setdefault("MKL_NUM_THREADS", "1")
+from baselines.evaluation.parallel import pin_threads
 
-from train.cli import main
+pin_threads()  # before numpy and torch load
+
+from train.cli import main  # noqa: E402
 
 sys.exit(main())

@@ -1,10 +1,11 @@
 """SB3 callbacks of the training CLI: progress bar, periodic evaluation, checkpoints, stop.
 
-Evaluation runs the policy in memory through ``baselines.rollout.rollout`` (the rollout and
-metrics code of the paper reproduction and the benchmark), on the evaluation seeds, and logs
-it next to the analytic controllers (computed once per run). Checkpoints are taken at the
-start of a rollout, after the previous gradient update, where the model, the environment and
-the random generators together define the rest of the run exactly.
+Evaluation runs the policy in memory through ``baselines.evaluation.rollout.rollout`` (the
+rollout and metrics code of the paper reproduction and the benchmark), on the evaluation seeds,
+and logs it next to the analytic controllers (computed once per run). Checkpoints and stops
+(Ctrl-C, time limit) happen at the start of a rollout, after the previous gradient update,
+where the model, the environment and the random generators together define the rest of the
+run exactly.
 """
 
 from __future__ import annotations
@@ -19,12 +20,18 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
+from baselines.reporting.criteria import learned_score
+
+#: the score the best model is kept by (:func:`baselines.reporting.criteria.learned_score`)
+eval_score = learned_score
+
 __all__ = [
     "CheckpointCallback",
     "EvalCallback",
     "GracefulInterrupt",
     "ProgressCallback",
     "StopCallback",
+    "StopTraining",
     "eval_score",
     "summarize_metrics",
 ]
@@ -55,23 +62,6 @@ def summarize_metrics(rows: list[dict[str, Any]]) -> dict[str, float]:
     return out
 
 
-def eval_score(summary: dict[str, float]) -> float:
-    """Lower is better: the issue's acceptance targets as one number (0 = every target met).
-
-    ``max(0, median err - 0.05)/0.05 + max(0, max err - 0.1)/0.1 + max(0, band - 6)/6
-    + max(0, 1 - min separation)`` plus the median error itself as a tie-breaker.
-    """
-    band = summary["band_time_max"]
-    band_pen = 10.0 if not math.isfinite(band) else max(0.0, band - 6.0) / 6.0
-    return (
-        max(0.0, summary["ss_error_median"] - 0.05) / 0.05
-        + max(0.0, summary["ss_error_max"] - 0.1) / 0.1
-        + band_pen
-        + max(0.0, 1.0 - summary["min_separation_min"])
-        + summary["ss_error_median"]
-    )
-
-
 class GracefulInterrupt:
     """First Ctrl-C (SIGINT) sets a flag the callbacks turn into a clean stop; a second one
     raises KeyboardInterrupt as usual. Restores the previous handler on exit."""
@@ -100,8 +90,17 @@ class GracefulInterrupt:
             self._previous = None
 
 
+class StopTraining(Exception):
+    """Raised by :class:`StopCallback` at a rollout boundary to end ``model.learn()`` there."""
+
+
 class StopCallback(BaseCallback):
-    """Stops learning on Ctrl-C (see :class:`GracefulInterrupt`) or after a wall-time limit."""
+    """Stops learning on Ctrl-C (see :class:`GracefulInterrupt`) or after a wall-time limit,
+    at the start of the next rollout: after the last gradient update, before any new step,
+    the point where a checkpoint continues exactly (so a stopped run, resumed, ends where an
+    uninterrupted one ends). SB3 lets a callback stop only from a step, one step into the
+    rollout, so it raises :class:`StopTraining` instead; :func:`train.run.train` catches it.
+    """
 
     def __init__(self, interrupt: GracefulInterrupt, time_limit_s: float | None, start: float):
         super().__init__()
@@ -110,13 +109,15 @@ class StopCallback(BaseCallback):
         self.start = start
         self.reason: str | None = None
 
-    def _on_step(self) -> bool:
+    def _on_rollout_start(self) -> None:
         if self.interrupt.requested:
             self.reason = "interrupted (Ctrl-C)"
-            return False
-        if self.time_limit_s is not None and time.perf_counter() - self.start > self.time_limit_s:
+        elif self.time_limit_s is not None and time.perf_counter() - self.start > self.time_limit_s:
             self.reason = f"time limit of {self.time_limit_s / 60:.1f} min reached"
-            return False
+        if self.reason is not None:
+            raise StopTraining(self.reason)
+
+    def _on_step(self) -> bool:
         return True
 
 
@@ -158,7 +159,7 @@ class ProgressCallback(BaseCallback):
             self.bar.set_postfix(self.postfix, refresh=True)
 
     def _on_training_end(self) -> None:
-        if self.bar is not None:
+        if self.bar is not None:  # also called after a stop (StopTraining)
             self.bar.update(self.num_timesteps - self.bar.n)
             self.bar.close()
             self.bar = None

@@ -58,7 +58,7 @@ def set_rng_state(model: Any, state: dict[str, Any]) -> None:
 def save_checkpoint(root: Path, model: Any, venv: Any, extra: dict[str, Any], keep: int) -> Path:
     """Write checkpoint ``root/step_<N>`` (N = model.num_timesteps) atomically; keep the
     newest ``keep`` checkpoints (0 keeps all)."""
-    from baselines.io import atomic_write_text, write_json
+    from baselines.evaluation.io import atomic_write_text, write_json
 
     root = Path(root)
     root.mkdir(parents=True, exist_ok=True)

@@ -31,8 +31,8 @@ EPILOG = textwrap.dedent(
     every file is written atomically (temporary file + rename).
 
     evaluation: every --eval-every steps the policy runs full episodes (the preset's 50 s) on
-    --eval-seeds through baselines.rollout, the code of the paper reproduction, and is logged
-    next to --eval-baselines. Ctrl-C stops cleanly: a checkpoint and final_model.zip are
+    --eval-seeds through baselines.evaluation.rollout, the code of the paper reproduction, and is
+    logged next to --eval-baselines. Ctrl-C stops cleanly: a checkpoint and final_model.zip are
     written and the exit status is 130; a second Ctrl-C aborts at once.
 
     examples:
@@ -40,6 +40,7 @@ EPILOG = textwrap.dedent(
       python -m train --algo sac --set n_uavs=20 --set pair_accel_limit=50 \\
           --total-steps 300000 --hp buffer_size=200000 --out runs/sac
       python -m train --resume runs/pair_n20_a50          # continue from the latest checkpoint
+      python -m train --resume runs/pair_n20_a50 --total-steps 2e7   # train a finished run on
       python -m train.evaluate runs/pair_n20_a50/final_model.zip --n-uavs 20 50 100
     """
 )
@@ -72,16 +73,9 @@ def _seed_list(text: str) -> list[int]:
         ) from None
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _task_options(p: argparse.ArgumentParser) -> None:
     from .settings import ALGOS
 
-    p = argparse.ArgumentParser(
-        prog="python -m train",
-        description="Train a policy for the pairflock pair action slot with stable-baselines3 "
-        "(PPO, SAC, TD3) on the native batched VecEnv, one row per paired UAV.",
-        epilog=EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
     g = p.add_argument_group("task")
     g.add_argument(
         "--config",
@@ -116,18 +110,26 @@ def build_parser() -> argparse.ArgumentParser:
     )
     g = p.add_argument_group("learning interface")
     g.add_argument(
+        "--interface",
         "--frame",
+        dest="interface",
         choices=("pair", "world"),
-        help="what the policy sees and outputs (default: pair; see pairflock_env.learning)",
+        help="what the policy sees and outputs (default: pair; see pairflock_env.learning; "
+        "--frame is the old name)",
     )
     g.add_argument(
+        "--interface-param",
         "--frame-param",
-        dest="frame_sets",
+        dest="interface_sets",
         action="append",
         default=[],
         metavar="NAME=VALUE",
-        help="PairFrameParams field, repeatable (e.g. --frame-param w_separation=2)",
+        help="PairFrameParams field, repeatable (e.g. --interface-param w_separation=2; "
+        "--frame-param is the old name)",
     )
+
+
+def _algorithm_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("algorithm")
     g.add_argument(
         "--total-steps",
@@ -141,9 +143,12 @@ def build_parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         metavar="NAME=VALUE",
-        help="SB3 hyperparameter, value parsed as YAML, repeatable; nested with dots "
+        help="SB3 hyperparameter, repeatable; nested with dots "
         "(e.g. --hp learning_rate=1e-3 --hp policy_kwargs.net_arch=[64,64])",
     )
+
+
+def _schedule_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("schedule and output")
     g.add_argument("--out", type=Path, help="run directory (required unless --resume)")
     g.add_argument("--overwrite", action="store_true", help="replace a non-empty --out")
@@ -177,6 +182,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     g.add_argument("--no-tensorboard", action="store_true", help="CSV log only")
     g.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The training CLI's argument parser."""
+    p = argparse.ArgumentParser(
+        prog="python -m train",
+        description="Train a policy for the pairflock pair action slot with stable-baselines3 "
+        "(PPO, SAC, TD3) on the native batched VecEnv, one row per paired UAV.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _task_options(p)
+    _algorithm_options(p)
+    _schedule_options(p)
     return p
 
 
@@ -187,11 +206,12 @@ def _parse_sets(items: list[str], flag: str):
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m train`` / ``pairflock-train``; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    from .run import pin_threads
+    from baselines.evaluation.parallel import pin_threads
 
-    pin_threads()
+    pin_threads(load_torch=True)
     from .callbacks import GracefulInterrupt
 
     try:
@@ -202,84 +222,108 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 2  # pragma: no cover
 
 
-def _main(args: argparse.Namespace, parser: argparse.ArgumentParser, interrupt) -> int:
-    from .run import train
+#: options a resumed run may not change (it continues as it was set up)
+_FIXED_ON_RESUME = (
+    "config",
+    "algo",
+    "preset",
+    "dynamics",
+    "num_swarms",
+    "interface",
+    "seed",
+    "eval_every",
+    "eval_seeds",
+    "eval_baselines",
+    "checkpoint_every",
+    "keep_checkpoints",
+)
+
+
+def _resume_settings(args: argparse.Namespace):
+    """(settings, run directory) of ``--resume``."""
+    from .checkpoint import latest_checkpoint
     from .settings import load_yaml, settings_from_sources
 
-    if args.resume is not None:
-        changing = [
-            name
-            for name in (
-                "config",
-                "algo",
-                "preset",
-                "dynamics",
-                "num_swarms",
-                "frame",
-                "seed",
-                "eval_every",
-                "eval_seeds",
-                "eval_baselines",
-                "checkpoint_every",
-                "keep_checkpoints",
-            )
-            if getattr(args, name) is not None
-        ]
-        changing += [
-            f for f in ("env_sets", "eval_sets", "frame_sets", "hp_sets") if getattr(args, f)
-        ]
-        if changing or args.overwrite or args.no_tensorboard:
-            raise ValueError(
-                "--resume continues a run as it was set up; it cannot change "
-                f"{changing or '--overwrite'} "
-                "(only --total-steps, --time-limit and --quiet)"
-            )
-        from .checkpoint import latest_checkpoint
-
-        ckpt = latest_checkpoint(args.resume)
-        run_dir = ckpt.parent.parent
-        if args.out is not None and Path(args.out).resolve() != run_dir.resolve():
-            raise ValueError(
-                f"--out {str(args.out)!r} differs from the resumed run {str(run_dir)!r}"
-            )
-        data = load_yaml(run_dir / "settings.yaml")
-        flags = {"total_steps": args.total_steps, "time_limit": args.time_limit}
-        settings = settings_from_sources(data, flags)
-        out = run_dir
-    else:
-        if args.out is None:
-            parser.error("--out is required (or --resume RUN_DIR)")
-        data = load_yaml(args.config) if args.config is not None else None
-        env_sets = _parse_sets(args.env_sets, "--set")
-        eval_sets = _parse_sets(args.eval_sets, "--eval-set")
-        flags = {
-            "algo": args.algo,
-            "preset": args.preset,
-            "dynamics": args.dynamics,
-            "frame": args.frame,
-            "num_swarms": args.num_swarms,
-            "total_steps": args.total_steps,
-            "seed": args.seed,
-            "eval_every": args.eval_every,
-            "eval_seeds": args.eval_seeds,
-            "eval_baselines": args.eval_baselines,
-            "checkpoint_every": args.checkpoint_every,
-            "keep_checkpoints": args.keep_checkpoints,
-            "time_limit": args.time_limit,
-            "tensorboard": False if args.no_tensorboard else None,
-        }
-        if eval_sets:
-            base = dict((data or {}).get("eval_env", {}))
-            base.update(dict(eval_sets))
-            flags["eval_env"] = base
-        settings = settings_from_sources(
-            data,
-            flags,
-            env_sets=env_sets,
-            hp_sets=_parse_sets(args.hp_sets, "--hp"),
-            frame_sets=_parse_sets(args.frame_sets, "--frame-param"),
+    changing = [name for name in _FIXED_ON_RESUME if getattr(args, name) is not None]
+    changing += [
+        f for f in ("env_sets", "eval_sets", "interface_sets", "hp_sets") if getattr(args, f)
+    ]
+    if changing or args.overwrite or args.no_tensorboard:
+        raise ValueError(
+            "--resume continues a run as it was set up; it cannot change "
+            f"{changing or '--overwrite'} "
+            "(only --total-steps, --time-limit and --quiet)"
         )
-        out = args.out
+    run_dir = latest_checkpoint(args.resume).parent.parent
+    if args.out is not None and Path(args.out).resolve() != run_dir.resolve():
+        raise ValueError(f"--out {str(args.out)!r} differs from the resumed run {str(run_dir)!r}")
+    data = load_yaml(run_dir / "settings.yaml")
+    flags = {"total_steps": args.total_steps, "time_limit": args.time_limit}
+    return settings_from_sources(data, flags), run_dir
+
+
+def _new_settings(args: argparse.Namespace, parser: argparse.ArgumentParser):
+    """Settings of a new run: defaults < ``--config`` < flags < assignments."""
+    from .settings import load_yaml, settings_from_sources
+
+    if args.out is None:
+        parser.error("--out is required (or --resume RUN_DIR)")
+    data = load_yaml(args.config) if args.config is not None else None
+    flags = {
+        "algo": args.algo,
+        "preset": args.preset,
+        "dynamics": args.dynamics,
+        "interface": args.interface,
+        "num_swarms": args.num_swarms,
+        "total_steps": args.total_steps,
+        "seed": args.seed,
+        "eval_every": args.eval_every,
+        "eval_seeds": args.eval_seeds,
+        "eval_baselines": args.eval_baselines,
+        "checkpoint_every": args.checkpoint_every,
+        "keep_checkpoints": args.keep_checkpoints,
+        "time_limit": args.time_limit,
+        "tensorboard": False if args.no_tensorboard else None,
+    }
+    eval_sets = _parse_sets(args.eval_sets, "--eval-set")
+    if eval_sets:
+        flags["eval_env"] = {**dict((data or {}).get("eval_env", {})), **dict(eval_sets)}
+    return settings_from_sources(
+        data,
+        flags,
+        env_sets=_parse_sets(args.env_sets, "--set"),
+        hp_sets=_parse_sets(args.hp_sets, "--hp"),
+        interface_sets=_parse_sets(args.interface_sets, "--interface-param"),
+    )
+
+
+def _message(result, settings, out) -> str:
+    from .run import ALREADY_COMPLETE
+
+    if result.status == ALREADY_COMPLETE:
+        return (
+            f"{out} is complete: {result.num_timesteps} steps of {settings.total_steps}; "
+            "nothing to do, nothing changed (raise --total-steps to train on)"
+        )
+    s = result.final_summary
+    msg = f"{result.status}: {result.num_timesteps} steps in {result.wall_s / 60:.1f} min -> {out}"
+    if s:
+        msg += (
+            f"\nevaluation on seeds {settings.eval_seeds[0]}-{settings.eval_seeds[-1]}: "
+            f"steady error median {s['ss_error_median']:.3f} m, max {s['ss_error_max']:.3f} m; "
+            f"in the 0.5 m band for good by {s['band_time_max']:.2f} s; min pair-other "
+            f"distance {s['min_separation_min']:.2f} m"
+        )
+    return msg
+
+
+def _main(args: argparse.Namespace, parser: argparse.ArgumentParser, interrupt) -> int:
+    from .run import train
+
+    if args.resume is not None:
+        settings, out = _resume_settings(args)
+    else:
+        settings, out = _new_settings(args, parser), args.out
     result = train(
         settings,
         out,
@@ -288,16 +332,7 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser, interrupt) 
         overwrite=args.overwrite,
         interrupt=interrupt,
     )
-    s = result.final_summary
-    msg = f"{result.status}: {result.num_timesteps} steps in {result.wall_s / 60:.1f} min -> {out}"
-    if s:
-        msg += (
-            f"\nevaluation on seeds {settings.eval_seeds[0]}-{settings.eval_seeds[-1]}: "
-            f"steady error median {s['ss_error_median']:.3f} m, max {s['ss_error_max']:.3f} m; "
-            f"0.5 m band by {s['band_time_max']:.2f} s; min pair-other distance "
-            f"{s['min_separation_min']:.2f} m"
-        )
-    print(msg, file=sys.stderr if args.quiet else sys.stdout)
+    print(_message(result, settings, out), file=sys.stderr if args.quiet else sys.stdout)
     return 130 if result.interrupted else 0
 
 

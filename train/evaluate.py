@@ -1,5 +1,5 @@
 """Evaluate a trained pair policy next to the analytic controllers, with the reproduction's
-rollout and metrics (``baselines.rollout``), on held-out seeds.
+rollout and metrics (``baselines.evaluation.rollout``), on held-out seeds.
 
     python -m train.evaluate models/pair_n20_a50.zip                 # N = 20, 10 seeds
     python -m train.evaluate models/pair_n20_a50.zip --n-uavs 20 50 100 --init corners random
@@ -10,38 +10,40 @@ and ``init`` varied as asked and ``--set`` overrides on top. Baselines are names
 ``baselines.make_pair_policy``; ``name@LIMIT`` runs it with ``pair_accel_limit=LIMIT`` (e.g.
 ``smc@1000``: sliding mode with the paper's unconstrained acceleration). Writes
 ``results.csv`` (one row per run), ``summary.md`` (median [min-max] over seeds per setting
-and policy, and the issue's acceptance targets for the learned policy) and ``run.json``.
+and policy, and the learned policy's targets,
+:data:`baselines.reporting.criteria.LEARNED`) and ``run.json``.
 """
 
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import sys
 import time
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from baselines.evaluation.parallel import imap_unordered, pin_threads
+from baselines.reporting.criteria import check_learned
 
-__all__ = ["acceptance", "main", "run_job", "summary_table"]
+__all__ = ["COLUMNS", "acceptance", "build_parser", "main", "run_job", "summary_table"]
 
 #: (metric, column title, format) of the summary table
 COLUMNS = (
-    ("band_time", "0.5 m band (s)", "{:.2f}"),
+    ("band_time", "in 0.5 m band for good (s)", "{:.2f}"),
     ("ss_mean_error", "steady mean err (m)", "{:.3f}"),
     ("ss_max_error", "steady max err (m)", "{:.3f}"),
     ("min_pair_separation", "min pair-other dist (m)", "{:.2f}"),
     ("peak_accel", "peak pair accel (m/s^2)", "{:.0f}"),
     ("s_settle_time", "s settle (s)", "{:.2f}"),
 )
+#: the learned policy's targets at (N, init), every seed (one definition, in the criteria)
+acceptance = check_learned
 
 
 def _task_overrides(model_path: Path) -> tuple[str, dict[str, Any]]:
-    from baselines.sb3_policy import read_metadata
+    from baselines.controllers.sb3 import read_metadata
 
     meta = read_metadata(model_path)
     settings = meta.get("settings")
@@ -49,7 +51,7 @@ def _task_overrides(model_path: Path) -> tuple[str, dict[str, Any]]:
         raise ValueError(f"{str(model_path)!r} has no training settings in its metadata")
     from train.settings import RunSettings
 
-    s = RunSettings(**settings)
+    s = RunSettings.from_dict(settings)
     return s.preset, s.eval_overrides()
 
 
@@ -57,15 +59,9 @@ def run_job(
     model_path: str, policy: str, n_uavs: int, init: str, seeds: list[int], extra: dict[str, Any]
 ) -> list[dict[str, Any]]:
     """Metrics per seed of one (policy, N, init) combination."""
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
-    try:
-        import torch
-
-        torch.set_num_threads(1)
-    except ImportError:  # pragma: no cover
-        pass
+    pin_threads(load_torch=True)
     from baselines import make_pair_policy
-    from baselines.rollout import rollout, trace_metrics
+    from baselines.evaluation.rollout import rollout, trace_metrics
     from pairflock_env import make_config
 
     preset, over = _task_overrides(Path(model_path))
@@ -93,66 +89,26 @@ def run_job(
 
 
 def summary_table(rows: list[dict[str, Any]], policies: list[str]) -> str:
-    from baselines.report import stat_cell
+    """Markdown: median [min-max] over seeds per (N, init, policy); corners first."""
+    from baselines.reporting.tables import summary_table as table
 
-    header = "| N | init | policy | limit (m/s^2) | " + " | ".join(c[1] for c in COLUMNS) + " |"
-    lines = [header, "|" + "---|" * (len(COLUMNS) + 4)]
-    keys = sorted({(r["n_uavs"], r["init"]) for r in rows}, key=lambda k: (k[1] != "corners", k[0]))
-    for n, init in keys:
-        for pol in policies:
-            sel = [r for r in rows if r["n_uavs"] == n and r["init"] == init and r["policy"] == pol]
-            if not sel:
-                continue
-            cells = [stat_cell([r[m] for r in sel], f) for m, _, f in COLUMNS]
-            lim = f"{sel[0]['pair_accel_limit']:.0f}"
-            lines.append(f"| {n} | {init} | {pol} | {lim} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
-
-
-def acceptance(rows: list[dict[str, Any]], n_uavs: int = 20, init: str = "corners"):
-    """The targets for the learned policy at (N, init): list of (criterion, ok, measured)."""
-    sel = [
-        r for r in rows if r["policy"] == "learned" and r["n_uavs"] == n_uavs and r["init"] == init
-    ]
-    if not sel:
-        return []
-    e = np.array([r["ss_mean_error"] for r in sel])
-    b = np.array([r["band_time"] for r in sel], dtype=float)
-    s = np.array([r["min_pair_separation"] for r in sel])
-    band_ok = bool(np.all(np.isfinite(b)) and np.all(b <= 6.0))
-    return [
-        (
-            f"N={n_uavs} {init}: median steady-state abs error <= 0.05 m",
-            bool(np.median(e) <= 0.05),
-            f"{np.median(e):.4f} m",
+    rank = {p: i for i, p in enumerate(policies)}
+    return table(
+        [r for r in rows if r["policy"] in rank],
+        COLUMNS,
+        lead=(
+            ("N", "n_uavs"),
+            ("init", "init"),
+            ("policy", "policy"),
+            ("limit (m/s^2)", lambda r: f"{r['pair_accel_limit']:.0f}"),
         ),
-        (f"N={n_uavs} {init}: no seed above 0.1 m", bool(np.all(e <= 0.1)), f"max {e.max():.4f} m"),
-        (
-            f"N={n_uavs} {init}: 0.5 m band within 6 s on every seed",
-            band_ok,
-            f"max {np.nanmax(b) if np.isfinite(b).any() else math.nan:.2f} s"
-            + (
-                f", never on {int(np.sum(~np.isfinite(b)))} seeds"
-                if not np.all(np.isfinite(b))
-                else ""
-            ),
-        ),
-        (
-            f"N={n_uavs} {init}: min pair-to-other distance >= 1 m on every seed (aim)",
-            bool(np.all(s >= 1.0)),
-            f"min {s.min():.2f} m; {int(np.sum(s < 1.0))}/{len(s)} seeds below",
-        ),
-    ]
-
-
-def _verdict(criterion: str, ok: bool) -> str:
-    """pass/FAIL for a target; met/missed for an aim (an aim never fails ``--check``)."""
-    if "(aim)" in criterion:
-        return "met" if ok else "missed"
-    return "pass" if ok else "FAIL"
+        group=lambda r: (r["n_uavs"], r["init"], r["policy"]),
+        sort=lambda g: (g[1] != "corners", g[0], rank[g[2]]),
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The evaluation's argument parser."""
     p = argparse.ArgumentParser(
         prog="python -m train.evaluate",
         description=__doc__.split("\n\n")[0],
@@ -202,22 +158,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--check",
         action="store_true",
-        help="exit status 1 unless the learned policy meets the N=20 corners targets",
+        help="exit status 1 unless the learned policy meets the N=20 corners targets "
+        "(targets of baselines.reporting.criteria.LEARNED)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    from tqdm import tqdm
-
+def _check_args(args: argparse.Namespace, parser: argparse.ArgumentParser) -> dict[str, Any]:
+    """Validate the options; returns the ``--set`` overrides."""
     from baselines import POLICIES
-    from baselines.io import atomic_write_text, run_record, write_csv, write_json
-
-    from .settings import parse_assignment
+    from baselines.evaluation.specs import parse_assignment
 
     if not args.model.is_file():
         parser.error(f"model {str(args.model)!r} does not exist")
@@ -244,55 +195,71 @@ def main(argv: Sequence[str] | None = None) -> int:
         _task_overrides(args.model)
     except (ValueError, FileNotFoundError) as e:
         parser.error(str(e))
-    out = args.out or Path("results") / f"eval_{args.model.stem}"
-    seeds = list(range(args.first_seed, args.first_seed + args.seeds))
-    policies = ["learned", *args.baselines]
+    return extra
+
+
+def _run(args, policies: list[str], seeds: list[int], extra) -> list[dict[str, Any]]:
+    from tqdm import tqdm
+
     jobs = [
         (str(args.model), pol, n, init, seeds, extra)
         for n in sorted(args.n_uavs, reverse=True)
         for init in args.init
         for pol in policies
     ]
-    t0 = time.perf_counter()
     rows: list[dict[str, Any]] = []
-    bar = tqdm(total=len(jobs), desc="evaluate", unit="job", disable=args.quiet)
-    if args.workers <= 1:
-        for j in jobs:
-            rows += run_job(*j)
+    with tqdm(total=len(jobs), desc="evaluate", unit="job", disable=args.quiet) as bar:
+        for _, job_rows in imap_unordered(run_job, jobs, args.workers):
+            rows += job_rows
             bar.update()
-    else:
-        with ProcessPoolExecutor(max_workers=args.workers) as pool:
-            futs = [pool.submit(run_job, *j) for j in jobs]
-            for f in as_completed(futs):
-                rows += f.result()
-                bar.update()
-    bar.close()
     order = {p: i for i, p in enumerate(policies)}
     rows.sort(key=lambda r: (r["init"] != "corners", r["n_uavs"], order[r["policy"]], r["seed"]))
-    table = summary_table(rows, policies)
-    checks = acceptance(rows)
+    return rows
+
+
+def _summary(model: Path, seeds: list[int], table: str, checks) -> str:
+    from baselines.reporting.criteria import criteria_table
+
     md = [
-        f"# Evaluation of `{args.model}`",
+        f"# Evaluation of `{model}`",
         "",
         f"Held-out seeds {seeds[0]}-{seeds[-1]}; full episodes; median [min-max] over seeds; "
-        "metrics of `pairflock_env.metrics` via `baselines.rollout`.",
+        "metrics of `pairflock_env.metrics` via `baselines.evaluation.rollout`.",
         "",
         table,
         "",
     ]
     if checks:
-        md += [
-            "## Targets (learned policy, N = 20, corners)",
-            "",
-            "| criterion | result | measured |",
-            "|---|---|---|",
-        ]
-        md += [f"| {c} | {_verdict(c, ok)} | {d} |" for c, ok, d in checks]
-    write_csv(out / "results.csv", rows)
-    atomic_write_text(out / "summary.md", "\n".join(md) + "\n")
-    write_json(
-        out / "run.json",
-        run_record(
+        md += ["## Targets (learned policy, N = 20, corners)", "", *criteria_table(checks)]
+    return "\n".join(md) + "\n"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m train.evaluate`` / ``pairflock-evaluate``; returns the exit status."""
+    pin_threads()
+    from baselines.evaluation.io import (
+        atomic_write_text,
+        result_folder,
+        run_record,
+        write_csv,
+        write_json,
+    )
+    from baselines.reporting.criteria import all_passed, criteria_lines
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    extra = _check_args(args, parser)
+    out = args.out or Path("results") / f"eval_{args.model.stem}"
+    seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+    policies = ["learned", *args.baselines]
+    t0 = time.perf_counter()
+    rows = _run(args, policies, seeds, extra)
+    table = summary_table(rows, policies)
+    checks = check_learned(rows)
+    with result_folder(out) as folder:  # complete and consistent, or marked INCOMPLETE
+        write_csv(folder / "results.csv", rows)
+        atomic_write_text(folder / "summary.md", _summary(args.model, seeds, table, checks))
+        record = run_record(
             model=str(args.model),
             seeds=seeds,
             n_uavs=args.n_uavs,
@@ -300,15 +267,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             policies=policies,
             extra_overrides=extra,
             wall_s=round(time.perf_counter() - t0, 1),
-        ),
-    )
+            outputs=["results.csv", "summary.md"],
+        )
+        write_json(folder / "run.json", record)
     print(table)
-    for c, ok, d in checks:
-        print(f"[{_verdict(c, ok)}] {c}: {d}")
+    for line in criteria_lines(checks):
+        print(line)
     print(f"wrote {out / 'summary.md'}")
-    if args.check and not all(ok for c, ok, _ in checks if "(aim)" not in c):
-        return 1
-    return 0
+    return 1 if args.check and not all_passed(checks) else 0
 
 
 if __name__ == "__main__":

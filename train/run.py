@@ -9,9 +9,10 @@ Used by the CLI (:mod:`train.cli`); importable for notebooks and tests::
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import json
 import math
-import os
 import shutil
 import time
 from pathlib import Path
@@ -19,35 +20,40 @@ from typing import Any
 
 import numpy as np
 
+from baselines.evaluation.parallel import pin_threads
+
+from .model import METADATA_KEY, linear_schedule, resolve_schedules
 from .settings import RunSettings
 
-__all__ = ["METADATA_KEY", "RunResult", "evaluate_policy_rows", "make_vec_env", "train"]
+__all__ = [
+    "METADATA_KEY",
+    "RunResult",
+    "evaluate_policy_rows",
+    "linear_schedule",
+    "make_vec_env",
+    "resolve_schedules",
+    "train",
+]
 
-METADATA_KEY = "pairflock"
 FINAL_MODEL = "final_model.zip"
 BEST_MODEL = "best_model.zip"
+#: status of a resumed run that had already reached its step target (nothing is changed)
+ALREADY_COMPLETE = "already complete"
 
 
 @dataclasses.dataclass
 class RunResult:
+    """What :func:`train` did: where, how many steps, how it ended, the last evaluation."""
+
     out: Path
     num_timesteps: int
-    status: str  # "completed" | "interrupted (Ctrl-C)" | "time limit ..."
+    status: str  # "completed" | "interrupted (Ctrl-C)" | "time limit ..." | "already complete"
     wall_s: float
     final_summary: dict[str, float] | None
 
     @property
     def interrupted(self) -> bool:
         return self.status.startswith("interrupted")
-
-
-def pin_threads() -> None:
-    """One thread for torch and BLAS: on a small shared CPU, SB3 runs faster that way."""
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
-    os.environ.setdefault("MKL_NUM_THREADS", "1")
-    import torch
-
-    torch.set_num_threads(1)
 
 
 def make_vec_env(settings: RunSettings, seed_offset: int = 0):
@@ -61,97 +67,257 @@ def make_vec_env(settings: RunSettings, seed_offset: int = 0):
         settings.preset,
         num_swarms=settings.num_swarms,
         seed=ss,
-        frame=settings.frame,
-        frame_params=settings.frame_params,
+        **settings.env_kwargs(),
         **settings.config_overrides(),
     )
     return VecMonitor(env)
 
 
-def linear_schedule(start: float):
-    """SB3 schedule falling linearly from ``start`` to 0 over training (rl-zoo's ``lin_<v>``)."""
-
-    def schedule(progress_remaining: float) -> float:
-        return progress_remaining * start
-
-    schedule.start = start  # type: ignore[attr-defined]
-    return schedule
-
-
-def resolve_schedules(hp: dict[str, Any]) -> dict[str, Any]:
-    """``"lin_3e-4"`` for learning_rate / clip_range means a linear decay from 3e-4 to 0."""
-    out = dict(hp)
-    for key in ("learning_rate", "clip_range"):
-        v = out.get(key)
-        if isinstance(v, str) and v.startswith("lin_"):
-            try:
-                start = float(v[4:])
-            except ValueError:
-                raise ValueError(
-                    f"hyperparameter {key}={v!r} is invalid: use lin_<number>"
-                ) from None
-            if start <= 0:
-                raise ValueError(f"hyperparameter {key}={v!r} is invalid: the start must be > 0")
-            out[key] = linear_schedule(start)
-    return out
-
-
-def _build_model(settings: RunSettings, venv):
-    import stable_baselines3 as sb3
-
-    hp = resolve_schedules(settings.algo_hyperparameters())
-    cls = getattr(sb3, settings.algo.upper())
-    if settings.algo == "td3":
-        from stable_baselines3.common.noise import NormalActionNoise
-
-        std = float(hp.pop("action_noise_std"))
-        D = venv.action_space.shape[0]
-        hp["action_noise"] = NormalActionNoise(np.zeros(D), std * np.ones(D))
-    return cls("MlpPolicy", venv, seed=settings.seed, device="cpu", verbose=0, **hp)
-
-
 def evaluate_policy_rows(policy: Any, cfg: Any, seeds: list[int]) -> list[dict[str, Any]]:
     """Metrics per seed of ``policy`` on ``cfg`` with the baselines' rollout code."""
-    from baselines.rollout import rollout, trace_metrics
+    from baselines.evaluation.rollout import rollout, trace_metrics
 
     return trace_metrics(rollout(cfg, policy, seeds))
-
-
-def _metadata(settings: RunSettings, interface: Any, cfg: Any) -> dict[str, Any]:
-    return {
-        "algo": settings.algo.upper(),
-        "interface": interface.to_dict(),
-        "config": cfg.to_dict(),
-        "settings": settings.to_dict(),
-    }
 
 
 def _write_settings(out: Path, settings: RunSettings) -> None:
     import yaml
 
-    from baselines.io import atomic_write_text
+    from baselines.evaluation.io import atomic_write_text
 
     text = yaml.safe_dump(settings.to_dict(), sort_keys=False, default_flow_style=None)
     atomic_write_text(out / "settings.yaml", text)
 
 
-def _csv_rows_text(rows: list[dict[str, Any]]) -> str:
-    import csv
-    import io
+def _prepare_dir(out: Path, overwrite: bool) -> None:
+    if out.exists() and any(out.iterdir()):
+        if not overwrite:
+            raise FileExistsError(
+                f"--out {str(out)!r} is not empty; pass --overwrite to replace it or "
+                f"--resume {str(out)!r} to continue it"
+            )
+        shutil.rmtree(out)
+    out.mkdir(parents=True, exist_ok=True)
 
-    from baselines.io import format_value
 
-    cols: list[str] = []
-    for r in rows:
-        for k in r:
-            if k not in cols:
-                cols.append(k)
-    buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: format_value(r.get(k)) for k in cols})
-    return buf.getvalue()
+def _last_summary(history: list[dict[str, Any]], step: int) -> dict[str, float] | None:
+    if history and history[-1]["step"] == step:
+        return {k: v for k, v in history[-1].items() if k not in ("step", "wall_s")}
+    return None
+
+
+class _Session:
+    """The state of one :func:`train` call; its methods run in the order ``train`` calls
+    them (the order of random draws is part of the bit-for-bit determinism)."""
+
+    def __init__(self, settings: RunSettings, out: Path, ckpt: Path | None, state, quiet: bool):
+        from pairflock_env import make_config
+
+        self.settings, self.out, self.ckpt, self.state, self.quiet = (
+            settings,
+            out,
+            ckpt,
+            state,
+            quiet,
+        )
+        self.t_start = time.perf_counter()
+        self.cfg = make_config(settings.preset, **settings.config_overrides())
+        self.eval_cfg = make_config(settings.preset, **settings.eval_overrides())
+        self.history: list[dict[str, Any]] = list(state["history"]) if state else []
+        self.wall_before = float(state.get("wall_s", 0.0)) if state else 0.0
+        self.checkpointer = None
+
+    def wall(self) -> float:
+        return self.wall_before + time.perf_counter() - self.t_start
+
+    # ------------------------------------------------------------------ env and model
+    def build_model(self) -> None:
+        from .checkpoint import restore_monitor, set_rng_state
+        from .model import build_model, load_model, metadata
+
+        self.venv = make_vec_env(self.settings)
+        self.interface = self.venv.unwrapped.interface
+        if self.state is None:
+            self.model = build_model(self.settings, self.venv)
+        else:
+            self.model = load_model(self.settings, self.ckpt, self.venv)
+            self.venv.unwrapped.set_state(self.state["env"])
+            restore_monitor(self.venv, self.state["monitor"])
+            set_rng_state(self.model, self.state["rng"])
+        setattr(self.model, METADATA_KEY, metadata(self.settings, self.interface, self.cfg))
+        self.start_steps = int(self.model.num_timesteps)
+
+    def set_logger(self) -> None:
+        from stable_baselines3.common.logger import CSVOutputFormat, Logger, TensorBoardOutputFormat
+
+        logs = self.out / "logs"
+        logs.mkdir(exist_ok=True)
+        formats = [CSVOutputFormat(str(logs / f"progress_from_{self.start_steps:012d}.csv"))]
+        if self.settings.tensorboard:
+            formats.append(TensorBoardOutputFormat(str(self.out / "tensorboard")))
+        self.model.set_logger(Logger(folder=str(logs), output_formats=formats))
+
+    # ------------------------------------------------------------------ evaluation
+    def baseline_summaries(self) -> dict[str, dict[str, float]]:
+        """The analytic controllers on the evaluation seeds, computed once per run."""
+        from baselines import make_pair_policy
+        from baselines.evaluation.io import write_json
+
+        from .callbacks import summarize_metrics
+
+        path, s = self.out / "eval_baselines.json", self.settings
+        if self.state is not None and path.is_file():
+            return json.loads(path.read_text(encoding="utf-8"))["summary"]
+        summaries, all_rows = {}, []
+        for name in s.eval_baselines:
+            pol = make_pair_policy(name, self.eval_cfg)
+            rows = evaluate_policy_rows(pol, self.eval_cfg, s.eval_seeds)
+            summaries[name] = summarize_metrics(rows)
+            all_rows += [{"policy": name, **r} for r in rows]
+        write_json(path, {"seeds": s.eval_seeds, "summary": summaries, "rows": all_rows})
+        return summaries
+
+    def evaluate(self):
+        from baselines.controllers.sb3 import SB3PairPolicy
+
+        from .callbacks import summarize_metrics
+
+        pol = SB3PairPolicy(self.model, self.eval_cfg, self.interface.to_dict())
+        rows = evaluate_policy_rows(pol, self.eval_cfg, self.settings.eval_seeds)
+        return rows, summarize_metrics(rows)
+
+    def on_result(self, step: int, rows, summary, improved: bool) -> None:
+        from baselines.evaluation.io import write_csv, write_json
+
+        from .model import save_model_atomic
+
+        self.history.append({"step": step, "wall_s": round(self.wall(), 1), **summary})
+        columns = list(dict.fromkeys(k for r in self.history for k in r))
+        write_csv(self.out / "eval.csv", self.history, columns)
+        if improved:
+            save_model_atomic(self.model, self.out / BEST_MODEL)
+            record = {"step": step, "summary": summary, "seeds": self.settings.eval_seeds}
+            write_json(self.out / "best_model.json", record)
+
+    # ------------------------------------------------------------------ callbacks
+    def make_callbacks(self, baselines: dict[str, dict[str, float]]) -> None:
+        from .callbacks import CheckpointCallback, EvalCallback, ProgressCallback
+
+        s, st = self.settings, self.state
+        self.progress = ProgressCallback(s.total_steps, disable=self.quiet)
+        # a new run evaluates its initial policy first; a resumed one keeps its schedule
+        self.evaluator = EvalCallback(
+            self.evaluate,
+            baselines,
+            s.eval_every,
+            self.on_result,
+            self.progress,
+            next_eval=0 if st is None else st["next_eval"],
+            best_score=st["best_score"] if st else math.inf,
+        )
+        next_save = s.checkpoint_every if st is None else st["next_checkpoint"]
+        self.checkpointer = CheckpointCallback(self.save, s.checkpoint_every, next_save=next_save)
+
+    def save(self, step: int) -> Path:
+        from .checkpoint import save_checkpoint
+
+        extra = {
+            "history": self.history,
+            "next_eval": self.evaluator.next_eval,
+            "best_score": self.evaluator.best_score,
+            "next_checkpoint": self.checkpointer.next_save if self.checkpointer else step,
+            "wall_s": self.wall(),
+        }
+        return save_checkpoint(
+            self.out / "checkpoints", self.model, self.venv, extra, self.settings.keep_checkpoints
+        )
+
+    # ------------------------------------------------------------------ learning
+    def start_record(self) -> None:
+        from baselines.evaluation.io import run_record, write_json
+
+        self.record = run_record(
+            settings=self.settings.to_dict(),
+            config=self.cfg.to_dict(),
+            eval_config=self.eval_cfg.to_dict(),
+            interface=self.interface.to_dict(),
+            seed=self.settings.seed,
+            resumed_from=None if self.state is None else str(self.ckpt),
+            start_steps=self.start_steps,
+            status="running",
+        )
+        resumed = f"run_resumed_{self.start_steps:012d}.json"
+        self.record_name = "run.json" if self.state is None else resumed
+        write_json(self.out / self.record_name, self.record)
+
+    def learn(self, interrupt: Any) -> str:
+        """Learn to the step target; a stop (Ctrl-C, time limit) ends at a rollout boundary,
+        where the checkpoint written next resumes exactly."""
+        from .callbacks import GracefulInterrupt, StopCallback, StopTraining
+
+        s = self.settings
+        time_limit = None if s.time_limit is None else s.time_limit * 60.0 - self.wall_before
+        guard = GracefulInterrupt() if interrupt is None else contextlib.nullcontext(interrupt)
+        with guard as interrupt:
+            stopper = StopCallback(interrupt, time_limit, self.t_start)
+            try:
+                self.model.learn(
+                    s.total_steps - self.start_steps,
+                    callback=[stopper, self.progress, self.checkpointer, self.evaluator],
+                    reset_num_timesteps=False,
+                    progress_bar=False,
+                )
+            except StopTraining:
+                self.progress.on_training_end()
+        return stopper.reason or "completed"
+
+    def finish(self, status: str, baselines) -> RunResult:
+        """Final checkpoint, model and evaluation (also after Ctrl-C: nothing is lost)."""
+        from baselines.evaluation.io import write_json
+
+        from .model import save_model_atomic
+
+        model = self.model
+        ck = self.save(model.num_timesteps)
+        save_model_atomic(model, self.out / FINAL_MODEL)
+        final_summary = None
+        if status == "completed":
+            final_summary = _last_summary(self.history, model.num_timesteps)
+            if final_summary is None:
+                self.evaluator.num_timesteps = model.num_timesteps
+                final_summary = self.evaluator.run_now()
+        session_s = time.perf_counter() - self.t_start
+        self.record.update(
+            status=status,
+            num_timesteps=int(model.num_timesteps),
+            wall_s=round(self.wall(), 1),
+            session_wall_s=round(session_s, 1),
+            steps_per_s=round((model.num_timesteps - self.start_steps) / max(session_s, 1e-9), 1),
+            last_checkpoint=str(ck),
+            final_summary=final_summary,
+            baselines=baselines,
+        )
+        write_json(self.out / self.record_name, self.record)
+        self.venv.close()
+        return RunResult(self.out, int(model.num_timesteps), status, self.wall(), final_summary)
+
+
+def _open(settings: RunSettings, out: Path, resume: Path | None, overwrite: bool):
+    """(checkpoint, its state) to resume from, or (None, None) for a new run in a fresh
+    ``out``; a resumed run that has reached its target gives a :class:`RunResult`."""
+    from .checkpoint import latest_checkpoint, load_checkpoint_state
+
+    if resume is None:
+        _prepare_dir(out, overwrite)
+        return None, None, None
+    ckpt = latest_checkpoint(resume)
+    state = load_checkpoint_state(ckpt)
+    steps = int(state["num_timesteps"])
+    if steps >= settings.total_steps:  # nothing to do, and nothing is written
+        summary = _last_summary(list(state["history"]), steps)
+        done = RunResult(out, steps, ALREADY_COMPLETE, float(state.get("wall_s", 0.0)), summary)
+        return ckpt, state, done
+    return ckpt, state, None
 
 
 def train(
@@ -165,220 +331,24 @@ def train(
 ) -> RunResult:
     """Train (or resume) a run in ``out``; see :mod:`train.cli` for the files written.
 
+    ``resume``: the run (or checkpoint) to continue; if it already reached
+    ``settings.total_steps`` nothing is changed and the status is ``"already complete"``.
     ``interrupt``: a :class:`~train.callbacks.GracefulInterrupt` already installed by the
     caller (the CLI installs it first thing, so Ctrl-C during setup also stops cleanly); by
-    default one is installed around learning.
+    default one is installed around learning. A stop (Ctrl-C, time limit) takes effect at
+    the end of the current rollout, so the run resumes exactly where it stopped.
     """
-    pin_threads()
-    import stable_baselines3 as sb3
-    from stable_baselines3.common.logger import CSVOutputFormat, Logger, TensorBoardOutputFormat
-
-    from baselines import make_pair_policy
-    from baselines.io import atomic_write_text, run_record, write_json
-    from baselines.sb3_policy import SB3PairPolicy
-    from pairflock_env import make_config
-
-    from .callbacks import (
-        CheckpointCallback,
-        EvalCallback,
-        GracefulInterrupt,
-        ProgressCallback,
-        StopCallback,
-        summarize_metrics,
-    )
-    from .checkpoint import (
-        latest_checkpoint,
-        load_checkpoint_state,
-        restore_monitor,
-        save_checkpoint,
-        set_rng_state,
-    )
-
+    pin_threads(load_torch=True)
     out = Path(out)
-    t_start = time.perf_counter()
-    cfg = make_config(settings.preset, **settings.config_overrides())
-    eval_cfg = make_config(settings.preset, **settings.eval_overrides())
-
-    # ------------------------------------------------------------------ run directory
-    ckpt_state = None
-    if resume is not None:
-        ckpt = latest_checkpoint(resume)
-        ckpt_state = load_checkpoint_state(ckpt)
-    else:
-        if out.exists() and any(out.iterdir()):
-            if not overwrite:
-                raise FileExistsError(
-                    f"--out {str(out)!r} is not empty; pass --overwrite to replace it or "
-                    f"--resume {str(out)!r} to continue it"
-                )
-            shutil.rmtree(out)
-        out.mkdir(parents=True, exist_ok=True)
+    ckpt, state, done = _open(settings, out, resume, overwrite)
+    if done is not None:
+        return done
+    session = _Session(settings, out, ckpt, state, quiet)
     _write_settings(out, settings)
-
-    # ------------------------------------------------------------------ env and model
-    venv = make_vec_env(settings)
-    interface = venv.unwrapped.interface
-    algo_cls = getattr(sb3, settings.algo.upper())
-    if ckpt_state is None:
-        model = _build_model(settings, venv)
-        wall_before = 0.0
-    else:
-        # force_reset=False keeps the saved last observation: the env continues, not resets
-        model = algo_cls.load(str(ckpt / "model.zip"), env=venv, device="cpu", force_reset=False)
-        if (ckpt / "replay_buffer.pkl").is_file():
-            model.load_replay_buffer(str(ckpt / "replay_buffer.pkl"))
-        venv.unwrapped.set_state(ckpt_state["env"])
-        restore_monitor(venv, ckpt_state["monitor"])
-        set_rng_state(model, ckpt_state["rng"])
-        wall_before = float(ckpt_state.get("wall_s", 0.0))
-    setattr(model, METADATA_KEY, _metadata(settings, interface, cfg))
-    start_steps = int(model.num_timesteps)
-
-    # ------------------------------------------------------------------ logging
-    logs = out / "logs"
-    logs.mkdir(exist_ok=True)
-    formats = [CSVOutputFormat(str(logs / f"progress_from_{start_steps:012d}.csv"))]
-    if settings.tensorboard:
-        formats.append(TensorBoardOutputFormat(str(out / "tensorboard")))
-    model.set_logger(Logger(folder=str(logs), output_formats=formats))
-
-    # ------------------------------------------------------------------ evaluation
-    base_path = out / "eval_baselines.json"
-    if ckpt_state is not None and base_path.is_file():
-        import json
-
-        baselines = json.loads(base_path.read_text(encoding="utf-8"))["summary"]
-    else:
-        baselines, base_rows = {}, []
-        for name in settings.eval_baselines:
-            rows = evaluate_policy_rows(
-                make_pair_policy(name, eval_cfg), eval_cfg, settings.eval_seeds
-            )
-            baselines[name] = summarize_metrics(rows)
-            base_rows += [{"policy": name, **r} for r in rows]
-        write_json(
-            base_path, {"seeds": settings.eval_seeds, "summary": baselines, "rows": base_rows}
-        )
-
-    history: list[dict[str, Any]] = list(ckpt_state["history"]) if ckpt_state else []
-
-    def evaluate():
-        pol = SB3PairPolicy(model, eval_cfg, interface.to_dict())
-        rows = evaluate_policy_rows(pol, eval_cfg, settings.eval_seeds)
-        return rows, summarize_metrics(rows)
-
-    def on_result(step: int, rows, summary, improved: bool) -> None:
-        history.append({"step": step, "wall_s": round(wall(), 1), **summary})
-        atomic_write_text(out / "eval.csv", _csv_rows_text(history))
-        if improved:
-            _save_model_atomic(model, out / BEST_MODEL)
-            write_json(
-                out / "best_model.json",
-                {"step": step, "summary": summary, "seeds": settings.eval_seeds},
-            )
-
-    def wall() -> float:
-        return wall_before + time.perf_counter() - t_start
-
-    progress = ProgressCallback(settings.total_steps, disable=quiet)
-    # a new run evaluates its initial policy first; a resumed one keeps its schedule
-    evaluator = EvalCallback(
-        evaluate,
-        baselines,
-        settings.eval_every,
-        on_result,
-        progress,
-        next_eval=0 if ckpt_state is None else ckpt_state["next_eval"],
-        best_score=ckpt_state["best_score"] if ckpt_state else math.inf,
-    )
-    checkpointer = None
-
-    def save(step: int) -> Path:
-        return save_checkpoint(
-            out / "checkpoints",
-            model,
-            venv,
-            {
-                "history": history,
-                "next_eval": evaluator.next_eval,
-                "best_score": evaluator.best_score,
-                "next_checkpoint": checkpointer.next_save if checkpointer else step,
-                "wall_s": wall(),
-            },
-            settings.keep_checkpoints,
-        )
-
-    checkpointer = CheckpointCallback(
-        save,
-        settings.checkpoint_every,
-        next_save=settings.checkpoint_every
-        if ckpt_state is None
-        else ckpt_state["next_checkpoint"],
-    )
-
-    record = run_record(
-        settings=settings.to_dict(),
-        config=cfg.to_dict(),
-        eval_config=eval_cfg.to_dict(),
-        interface=interface.to_dict(),
-        seed=settings.seed,
-        resumed_from=None if ckpt_state is None else str(ckpt),
-        start_steps=start_steps,
-        status="running",
-    )
-    record_name = "run.json" if ckpt_state is None else f"run_resumed_{start_steps:012d}.json"
-    write_json(out / record_name, record)
-
-    # ------------------------------------------------------------------ learn
-    remaining = settings.total_steps - start_steps
-    status = "completed"
-    time_limit = None if settings.time_limit is None else settings.time_limit * 60.0 - wall_before
-    import contextlib
-
-    guard = GracefulInterrupt() if interrupt is None else contextlib.nullcontext(interrupt)
-    with guard as interrupt:
-        stopper = StopCallback(interrupt, time_limit, t_start)
-        if remaining > 0:
-            model.learn(
-                remaining,
-                callback=[stopper, progress, checkpointer, evaluator],
-                reset_num_timesteps=False,
-                progress_bar=False,
-            )
-        else:
-            progress.disable = True
-        if stopper.reason is not None:
-            status = stopper.reason
-    # final checkpoint, model and evaluation (also after Ctrl-C: nothing is lost)
-    ck = save(model.num_timesteps)
-    _save_model_atomic(model, out / FINAL_MODEL)
-    final_summary = None
-    if status == "completed":
-        if evaluator.model is None:
-            evaluator.init_callback(model)
-        evaluator.num_timesteps = model.num_timesteps
-        if not history or history[-1]["step"] != model.num_timesteps:
-            final_summary = evaluator.run_now()
-        else:
-            final_summary = {k: v for k, v in history[-1].items() if k not in ("step", "wall_s")}
-    record.update(
-        status=status,
-        num_timesteps=int(model.num_timesteps),
-        wall_s=round(wall(), 1),
-        session_wall_s=round(time.perf_counter() - t_start, 1),
-        steps_per_s=round(
-            (model.num_timesteps - start_steps) / max(time.perf_counter() - t_start, 1e-9), 1
-        ),
-        last_checkpoint=str(ck),
-        final_summary=final_summary,
-        baselines=baselines,
-    )
-    write_json(out / record_name, record)
-    venv.close()
-    return RunResult(out, int(model.num_timesteps), status, wall(), final_summary)
-
-
-def _save_model_atomic(model: Any, path: Path) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.zip")
-    model.save(tmp)
-    os.replace(tmp, path)
+    session.build_model()
+    session.set_logger()
+    baselines = session.baseline_summaries()
+    session.make_callbacks(baselines)
+    session.start_record()
+    status = session.learn(interrupt)
+    return session.finish(status, baselines)

@@ -1,7 +1,7 @@
 """Everything a training run is built from, in one validated structure.
 
 A run is described by :class:`RunSettings`: the task (preset, dynamics, config overrides,
-number of swarms), the learning interface (``frame`` and its parameters), the algorithm and
+number of swarms), the learning interface (``interface`` and its parameters), the algorithm and
 its stable-baselines3 hyperparameters, the schedule (total steps, evaluation, checkpoints) and
 the seed. The CLI builds it from defaults, then a YAML file (``--config``), then flags, and
 stores the result in the run directory, so ``--config <run>/settings.yaml`` reruns it.
@@ -14,14 +14,17 @@ YAML layout (every key optional; see ``train/configs/*.yaml``)::
       n_uavs: 20
       pair_accel_limit: 50.0
     eval_env: {horizon: 50.0}  # overrides applied on top of env for evaluation
-    frame: pair                # pair | world
-    frame_params: {}           # PairFrameParams fields
+    interface: pair            # pair | world (the learning interface; old key: frame)
+    interface_params: {}       # PairFrameParams fields (old key: frame_params)
     num_swarms: 32
     total_steps: 20000000
     seed: 0
     hyperparameters:           # SB3 constructor keyword arguments for the algorithm
-      learning_rate: 3.0e-4    # or lin_3e-4: linear decay to 0 (also clip_range)
+      learning_rate: 3e-4      # or lin_3e-4: linear decay to 0 (also clip_range)
       policy_kwargs: {net_arch: [128, 128], log_std_init: -1.0}
+
+Numbers are read as written, also in exponent form without a point (``3e-4``, ``5e1``),
+in files and in ``--set``/``--hp``/``--interface-param`` values alike.
 """
 
 from __future__ import annotations
@@ -29,18 +32,54 @@ from __future__ import annotations
 import copy
 import dataclasses
 import difflib
+import inspect
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from baselines.evaluation.specs import parse_assignment
+
 __all__ = [
     "ALGOS",
     "DEFAULT_HYPERPARAMETERS",
+    "RENAMED_KEYS",
     "RunSettings",
+    "env_interface_kwargs",
     "load_yaml",
     "parse_assignment",
     "settings_from_sources",
 ]
+
+#: old settings keys -> new ones (the old ones still load, with a deprecation note)
+RENAMED_KEYS = {"frame": "interface", "frame_params": "interface_params"}
+
+
+def env_interface_kwargs(interface: str, params: Mapping[str, Any]) -> dict[str, Any]:
+    """The keyword arguments that choose the learning interface on the env constructors.
+
+    The one place that knows the env's keyword names (``frame=``/``frame_params=`` today,
+    ``interface=``/``interface_params=`` once the views take those).
+    """
+    return {"frame": interface, "frame_params": dict(params)}
+
+
+def _renamed(data: Mapping[str, Any], where: str, category: type[Warning] | None) -> dict:
+    """``data`` with old keys (:data:`RENAMED_KEYS`) under their new names; warns with
+    ``category`` (None: silently, e.g. for stored model metadata)."""
+    out = dict(data)
+    for old, new in RENAMED_KEYS.items():
+        if old not in out:
+            continue
+        if new in out:
+            raise ValueError(
+                f"{where}: {old!r} and {new!r} are the same setting; give only {new!r}"
+            )
+        if category is not None:
+            warnings.warn(f"{where}: {old!r} is deprecated; write {new!r}", category, stacklevel=3)
+        out[new] = out.pop(old)
+    return out
+
 
 ALGOS = ("ppo", "sac", "td3")
 
@@ -95,8 +134,8 @@ class RunSettings:
     dynamics: str | None = None
     env: dict[str, Any] = dataclasses.field(default_factory=dict)
     eval_env: dict[str, Any] = dataclasses.field(default_factory=dict)
-    frame: str = "pair"
-    frame_params: dict[str, Any] = dataclasses.field(default_factory=dict)
+    interface: str = "pair"
+    interface_params: dict[str, Any] = dataclasses.field(default_factory=dict)
     num_swarms: int = 32
     total_steps: int = 1_000_000
     seed: int = 0
@@ -109,7 +148,43 @@ class RunSettings:
     tensorboard: bool = True
     time_limit: float | None = None
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> RunSettings:
+        """Settings from a stored mapping (``settings.yaml``, model metadata), old keys too;
+        not validated."""
+        return cls(**_renamed(data, "settings", None))
+
+    @property
+    def frame(self) -> str:
+        """Deprecated name of :attr:`interface`."""
+        warnings.warn("RunSettings.frame is deprecated; use .interface", DeprecationWarning, 2)
+        return self.interface
+
+    @frame.setter
+    def frame(self, value: str) -> None:
+        warnings.warn("RunSettings.frame is deprecated; use .interface", DeprecationWarning, 2)
+        self.interface = value
+
+    @property
+    def frame_params(self) -> dict[str, Any]:
+        """Deprecated name of :attr:`interface_params`."""
+        warnings.warn(
+            "RunSettings.frame_params is deprecated; use .interface_params", DeprecationWarning, 2
+        )
+        return self.interface_params
+
+    @frame_params.setter
+    def frame_params(self, value: dict[str, Any]) -> None:
+        warnings.warn(
+            "RunSettings.frame_params is deprecated; use .interface_params", DeprecationWarning, 2
+        )
+        self.interface_params = value
+
     # ------------------------------------------------------------------ derived
+    def env_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of the training env's interface (:func:`env_interface_kwargs`)."""
+        return env_interface_kwargs(self.interface, self.interface_params)
+
     def config_overrides(self) -> dict[str, Any]:
         """PairFlockConfig overrides of the training task (``dynamics`` folded in)."""
         out = dict(self.env)
@@ -165,7 +240,7 @@ class RunSettings:
             raise ValueError(
                 f"time_limit={self.time_limit!r} is invalid: must be > 0 minutes or None"
             )
-        for name in ("env", "eval_env", "frame_params", "hyperparameters"):
+        for name in ("env", "eval_env", "interface_params", "hyperparameters"):
             if not isinstance(getattr(self, name), Mapping):
                 raise TypeError(f"{name}={getattr(self, name)!r} is invalid: must be a mapping")
         if not isinstance(self.eval_seeds, list) or not all(
@@ -174,7 +249,7 @@ class RunSettings:
             raise ValueError(f"eval_seeds={self.eval_seeds!r} is invalid: a list of ints >= 0")
         cfg = make_config(self.preset, **self.config_overrides())
         make_config(self.preset, **self.eval_overrides())
-        make_interface(self.frame, cfg, **self.frame_params)
+        make_interface(self.interface, cfg, **self.interface_params)
         from baselines import POLICIES
 
         for b in self.eval_baselines:
@@ -184,15 +259,13 @@ class RunSettings:
                     f"{', '.join(k for k in POLICIES if not k.endswith(':'))}"
                 )
         _check_hyperparameters(self.algo, self.algo_hyperparameters())
-        from .run import resolve_schedules
+        from .model import resolve_schedules
 
         resolve_schedules(self.algo_hyperparameters())
         return self
 
 
 def _check_hyperparameters(algo: str, hp: Mapping[str, Any]) -> None:
-    import inspect
-
     import stable_baselines3 as sb3
 
     cls = getattr(sb3, algo.upper())
@@ -215,45 +288,65 @@ def _check_hyperparameters(algo: str, hp: Mapping[str, Any]) -> None:
             )
 
 
+def _wrap_init(cls):
+    """Let ``RunSettings(frame=...)`` (the old keyword names) keep working, with a warning."""
+    init = cls.__init__
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        init(self, *args, **_renamed(kwargs, "RunSettings", DeprecationWarning))
+
+    __init__.__doc__ = init.__doc__
+    __init__.__signature__ = inspect.signature(init)  # type: ignore[attr-defined]
+    cls.__init__ = __init__
+    return cls
+
+
+_wrap_init(RunSettings)
+
+
+def _yaml_loader():
+    """PyYAML's safe loader reading numbers as a user writes them: YAML 1.1 takes ``1e-3``
+    and ``5e1`` (an exponent without a decimal point) for text, YAML 1.2 and Python for
+    numbers."""
+    import re
+
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        pass
+
+    exponent_float = re.compile(r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float", exponent_float, list("-+0123456789"))
+    return Loader
+
+
 def load_yaml(path: str | Path) -> dict[str, Any]:
-    """A settings mapping from a YAML file (unknown top-level keys raise with suggestions)."""
+    """A settings mapping from a YAML file (unknown top-level keys raise with suggestions;
+    the old keys ``frame``/``frame_params`` load with a deprecation note)."""
     import yaml
 
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"--config {str(path)!r} does not exist")
     with open(path, encoding="utf-8") as f:
-        data = yaml.safe_load(f) or {}
+        try:
+            data = yaml.load(f, Loader=_yaml_loader()) or {}
+        except yaml.YAMLError as e:
+            raise ValueError(f"--config {str(path)!r} is not valid YAML: {e}") from None
     if not isinstance(data, Mapping):
         raise ValueError(f"--config {str(path)!r} must hold a mapping, got {type(data).__name__}")
-    _check_keys(data, f"--config {path}")
-    return dict(data)
+    where = f"--config {path}"
+    _check_keys(data, where)
+    return _renamed(data, where, FutureWarning)
 
 
 def _check_keys(data: Mapping[str, Any], where: str) -> None:
     names = [f.name for f in dataclasses.fields(RunSettings)]
     for k in data:
-        if k not in names:
+        if k not in names and k not in RENAMED_KEYS:
             hint = difflib.get_close_matches(k, names, n=3)
             extra = f" Did you mean {', '.join(map(repr, hint))}?" if hint else ""
             raise ValueError(f"{where}: unknown key {k!r}.{extra} Valid keys: {', '.join(names)}")
-
-
-def parse_assignment(text: str, flag: str) -> tuple[str, Any]:
-    """``key=value`` with the value parsed as YAML (``1e-3``, ``[64, 64]``, ``true``, ``auto``)."""
-    import yaml
-
-    if "=" not in text:
-        raise ValueError(f"{flag} {text!r} is invalid: expected key=value")
-    key, raw = text.split("=", 1)
-    key = key.strip()
-    if not key:
-        raise ValueError(f"{flag} {text!r} is invalid: empty key")
-    try:
-        value = yaml.safe_load(raw)
-    except yaml.YAMLError as e:
-        raise ValueError(f"{flag} {text!r} is invalid: cannot parse the value ({e})") from None
-    return key, value
 
 
 def _set_nested(d: dict[str, Any], key: str, value: Any) -> None:
@@ -271,26 +364,33 @@ def settings_from_sources(
     flags: Mapping[str, Any] | None = None,
     env_sets: list[tuple[str, Any]] = (),
     hp_sets: list[tuple[str, Any]] = (),
+    interface_sets: list[tuple[str, Any]] = (),
+    *,
     frame_sets: list[tuple[str, Any]] = (),
 ) -> RunSettings:
-    """Defaults < YAML < flags (< ``--set`` / ``--hp`` / ``--frame-param`` assignments)."""
+    """Defaults < YAML < flags (< ``--set`` / ``--hp`` / ``--interface-param`` assignments).
+
+    ``frame_sets`` is the old name of ``interface_sets`` (both are applied); old keys in
+    ``yaml_data`` and ``flags`` are accepted too (:data:`RENAMED_KEYS`).
+    """
     data: dict[str, Any] = {}
     if yaml_data:
         _check_keys(yaml_data, "settings")
-        data.update(copy.deepcopy(dict(yaml_data)))
-    for k, v in (flags or {}).items():
-        if v is not None:
-            data[k] = v
+        data.update(copy.deepcopy(_renamed(yaml_data, "settings", DeprecationWarning)))
+    given = {k: v for k, v in (flags or {}).items() if v is not None}
+    data.update(_renamed(given, "flags", DeprecationWarning))
+    if frame_sets:
+        warnings.warn("frame_sets is deprecated; use interface_sets", DeprecationWarning, 2)
     s = RunSettings(**data)
     s.env = dict(s.env)
     s.hyperparameters = copy.deepcopy(dict(s.hyperparameters))
-    s.frame_params = dict(s.frame_params)
+    s.interface_params = dict(s.interface_params)
     for k, v in env_sets:
         s.env[k] = v
     for k, v in hp_sets:
         _set_nested(s.hyperparameters, k, v)
-    for k, v in frame_sets:
-        s.frame_params[k] = v
+    for k, v in [*interface_sets, *frame_sets]:
+        s.interface_params[k] = v
     if isinstance(s.eval_seeds, tuple):
         s.eval_seeds = list(s.eval_seeds)
     return s.validate()

@@ -23,6 +23,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from baselines.evaluation.parallel import pin_threads
+
 __all__ = ["main", "make_route"]
 
 ROUTES = ("native", "supersuit")
@@ -33,7 +35,10 @@ def make_route(route: str, num_swarms: int, overrides: dict[str, Any], seed: int
     if route == "native":
         from pairflock_env.envs.sb3 import PairFlockVecEnv
 
-        return PairFlockVecEnv(num_swarms=num_swarms, frame="world", seed=seed, **overrides)
+        from .settings import env_interface_kwargs
+
+        world = env_interface_kwargs("world", {})
+        return PairFlockVecEnv(num_swarms=num_swarms, seed=seed, **world, **overrides)
     if route == "supersuit":
         try:
             import supersuit as ss
@@ -125,20 +130,8 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
-    args = build_parser().parse_args(argv)
-    for name in ("n_uavs", "num_swarms", "steps", "env_steps", "repeats"):
-        if getattr(args, name) < 1:
-            raise SystemExit(
-                f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: must be >= 1"
-            )
-    import numpy as np
-    import torch
-
-    torch.set_num_threads(1)
-    from baselines.io import run_record, write_json
-
+def _hyperparameters(args: argparse.Namespace) -> dict[str, Any]:
+    """The training defaults of the algorithm, sized for a throughput run, plus ``--hp``."""
     from .settings import DEFAULT_HYPERPARAMETERS, parse_assignment
 
     hp = {k: v for k, v in DEFAULT_HYPERPARAMETERS[args.algo].items() if k != "action_noise_std"}
@@ -150,23 +143,64 @@ def main(argv: Sequence[str] | None = None) -> int:
     for item in args.hp:
         k, v = parse_assignment(item, "--hp")
         hp[k] = v
-    overrides = {"n_uavs": args.n_uavs, "pair_accel_limit": 50.0, "max_cycles": 1000}
-    results: dict[str, dict[str, list[float]]] = {r: {"env": [], "learn": []} for r in ROUTES}
+    return hp
+
+
+def _measure(args, hp, overrides) -> dict[str, dict[str, list[float]]]:
+    """Both routes, alternating, ``--repeats`` times."""
     from tqdm import tqdm
 
-    bar = tqdm(total=args.repeats * len(ROUTES), desc="throughput", unit="run")
-    for rep in range(args.repeats):
-        for route in ROUTES:
-            venv = make_route(route, args.num_swarms, overrides, args.seed + rep)
-            results[route]["env"].append(_env_rate(venv, args.env_steps, args.seed))
-            results[route]["learn"].append(_learn_rate(venv, args.algo, hp, args.steps, args.seed))
-            venv.close()
-            bar.update()
-    bar.close()
+    results: dict[str, dict[str, list[float]]] = {r: {"env": [], "learn": []} for r in ROUTES}
+    with tqdm(total=args.repeats * len(ROUTES), desc="throughput", unit="run") as bar:
+        for rep in range(args.repeats):
+            for route in ROUTES:
+                venv = make_route(route, args.num_swarms, overrides, args.seed + rep)
+                results[route]["env"].append(_env_rate(venv, args.env_steps, args.seed))
+                rate = _learn_rate(venv, args.algo, hp, args.steps, args.seed)
+                results[route]["learn"].append(rate)
+                venv.close()
+                bar.update()
+    return results
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m train.throughput`` / ``pairflock-throughput``; returns the exit status."""
+    pin_threads()
+    args = build_parser().parse_args(argv)
+    for name in ("n_uavs", "num_swarms", "steps", "env_steps", "repeats"):
+        if getattr(args, name) < 1:
+            raise SystemExit(
+                f"--{name.replace('_', '-')}={getattr(args, name)} is invalid: must be >= 1"
+            )
+    pin_threads(load_torch=True)
+    import numpy as np
+
+    from baselines.evaluation.io import run_record, write_json
+
+    hp = _hyperparameters(args)
+    overrides = {"n_uavs": args.n_uavs, "pair_accel_limit": 50.0, "max_cycles": 1000}
+    results = _measure(args, hp, overrides)
     med = {r: {k: float(np.median(v)) for k, v in d.items()} for r, d in results.items()}
     ratio = {k: med["native"][k] / med["supersuit"][k] for k in ("env", "learn")}
     rows = args.num_swarms * 2
-    summary = (
+    record = run_record(
+        algo=args.algo,
+        n_uavs=args.n_uavs,
+        num_swarms=args.num_swarms,
+        rows=rows,
+        steps=args.steps,
+        env_steps=args.env_steps,
+        repeats=args.repeats,
+        hyperparameters=hp,
+        task=overrides,
+        measurements=results,
+        median=med,
+        ratio=ratio,
+        load_average=list(os.getloadavg()),
+        cpu_count=os.cpu_count(),
+    )
+    write_json(args.out, record)
+    print(
         f"{args.algo.upper()}, N={args.n_uavs}, {args.num_swarms} swarms ({rows} rows), "
         f"median of {args.repeats}:\n"
         f"  env steps/s (random actions): native {med['native']['env']:.0f}, "
@@ -174,26 +208,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"  training steps/s (incl. learning): native {med['native']['learn']:.0f}, "
         f"supersuit {med['supersuit']['learn']:.0f}, ratio {ratio['learn']:.2f}x"
     )
-    write_json(
-        args.out,
-        run_record(
-            algo=args.algo,
-            n_uavs=args.n_uavs,
-            num_swarms=args.num_swarms,
-            rows=rows,
-            steps=args.steps,
-            env_steps=args.env_steps,
-            repeats=args.repeats,
-            hyperparameters=hp,
-            task=overrides,
-            measurements=results,
-            median=med,
-            ratio=ratio,
-            load_average=list(os.getloadavg()),
-            cpu_count=os.cpu_count(),
-        ),
-    )
-    print(summary)
     print(f"wrote {args.out}")
     return 0
 

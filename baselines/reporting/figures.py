@@ -20,9 +20,8 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from baselines.evaluation.io import atomic_write_bytes
 from pairflock_env.render import PAIR_COLORS, UNPAIRED_COLOR, draw_swarm
-
-from .io import atomic_write_bytes
 
 __all__ = [
     "POLICY_STYLE",
@@ -216,6 +215,26 @@ def error_figure(
     return fig
 
 
+def _box_with_dots(ax, v: np.ndarray, x: float, width: float, color) -> None:
+    """One box (min to max whiskers) at ``x`` with every run as a dot."""
+    bp = ax.boxplot(
+        [v],
+        positions=[x],
+        widths=width * 0.8,
+        whis=(0, 100),
+        patch_artist=True,
+        manage_ticks=False,
+    )
+    for box in bp["boxes"]:
+        box.set(facecolor=color, alpha=0.25, edgecolor=color)
+    for part in ("whiskers", "caps", "medians"):
+        for line in bp[part]:
+            line.set(color=color, lw=1.2 if part == "medians" else 0.8)
+    # deterministic spread of the dots across the box width
+    jitter = np.linspace(-0.3, 0.3, v.size) * width if v.size > 1 else np.zeros(1)
+    ax.plot(x + jitter, v, "o", ms=3, color=color, mec="k", mew=0.3, alpha=0.9)
+
+
 def steady_error_figure(
     values: Mapping[tuple[str, str], Sequence[float]],
     scenarios: Sequence[str],
@@ -246,24 +265,7 @@ def steady_error_figure(
             v = v[np.isfinite(v)]
             if v.size == 0:
                 continue
-            x = i + (j - (P - 1) / 2) * width
-            color = styles[pol]["color"]
-            bp = ax.boxplot(
-                [v],
-                positions=[x],
-                widths=width * 0.8,
-                whis=(0, 100),
-                patch_artist=True,
-                manage_ticks=False,
-            )
-            for box in bp["boxes"]:
-                box.set(facecolor=color, alpha=0.25, edgecolor=color)
-            for part in ("whiskers", "caps", "medians"):
-                for line in bp[part]:
-                    line.set(color=color, lw=1.2 if part == "medians" else 0.8)
-            # deterministic spread of the dots across the box width
-            jitter = np.linspace(-0.3, 0.3, v.size) * width if v.size > 1 else np.zeros(1)
-            ax.plot(x + jitter, v, "o", ms=3, color=color, mec="k", mew=0.3, alpha=0.9)
+            _box_with_dots(ax, v, i + (j - (P - 1) / 2) * width, width, styles[pol]["color"])
         labels.append(sc if not missing else f"{sc}\n({missing} runs: never)")
     for pol in policies:
         ax.plot([], [], "s", color=styles[pol]["color"], alpha=0.6, label=styles[pol]["label"])

@@ -12,8 +12,9 @@ The text before the first colon picks the entry of ``baselines.POLICIES``: a pla
 the rest verbatim, so a path may contain ``=`` or ``,`` without ambiguity.
 
 Scenario specs are configuration overrides ``key=value[,key=value...]``, optionally labelled
-``LABEL:key=value,...``. Values are JSON when they parse as JSON (numbers, ``true``,
-``null``, ``[[0, 1], [2, 3]]``), else plain text (``dynamics=particle``).
+``LABEL:key=value,...``. Values are read by :func:`parse_value`, the one value parser of every
+CLI: numbers as written (``1e-3``, ``20``), ``true``/``none``, lists (``[[0, 1], [2, 3]]``),
+else plain text (``dynamics=particle``).
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ __all__ = [
     "PolicySpec",
     "Scenario",
     "expand_scenarios",
+    "parse_assignment",
     "parse_assignments",
     "parse_policy",
     "parse_scenario",
@@ -65,23 +67,96 @@ class PolicySpec:
         return self.name.split(":", 1)[0]
 
     def build(self, env: Any) -> Any:
-        from . import make_pair_policy
+        from baselines.controllers import make_pair_policy
 
         return make_pair_policy(self.name, env, **dict(self.gains))
 
 
-def parse_value(text: str) -> Any:
-    """JSON if it parses (``2``, ``0.5``, ``true``, ``null``, ``[[0, 1]]``), else the text;
-    ``none``/``None`` also mean None."""
-    t = text.strip()
-    if t in ("none", "None"):
-        return None
-    if t in ("True", "False"):
-        return t == "True"
+#: words that mean None, True and False
+_WORDS: dict[str, Any] = {
+    "none": None,
+    "None": None,
+    "null": None,
+    "~": None,
+    "true": True,
+    "True": True,
+    "false": False,
+    "False": False,
+}
+
+
+def _number(text: str) -> int | float | None:
+    """``text`` as Python reads a number (``20``, ``1_000``, ``1e-3``, ``5e1``, ``.5``,
+    ``inf``), or None."""
     try:
-        return json.loads(t)
-    except json.JSONDecodeError:
-        return t
+        return int(text)
+    except ValueError:
+        pass
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def _numbers_inside(value: Any) -> Any:
+    """Numbers written as text inside a YAML flow value (YAML 1.1 reads ``1e-3`` as text)."""
+    if isinstance(value, str):
+        n = _number(value.strip())
+        return value if n is None else n
+    if isinstance(value, list):
+        return [_numbers_inside(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _numbers_inside(v) for k, v in value.items()}
+    return value
+
+
+def _yaml_flow(text: str) -> Any:
+    try:
+        import yaml
+    except ImportError:  # the base install has no YAML: JSON and Python literals only
+        raise ValueError(text) from None
+    try:
+        return _numbers_inside(yaml.safe_load(text))
+    except yaml.YAMLError as e:
+        raise ValueError(str(e)) from None
+
+
+def parse_value(text: str) -> Any:
+    """A command-line value as the user wrote it; the one parser of every CLI's ``KEY=VALUE``.
+
+    * numbers as Python reads them: ``20`` (int), ``1e-3``, ``5e1``, ``0.5``, ``.5``, ``inf``
+      (float), ``1_000``;
+    * ``true``/``false``/``none`` (also ``True``, ``False``, ``None``, ``null``);
+    * lists and mappings as JSON, Python literals or YAML flow (``[64, 64]``,
+      ``[[0, 1], [2, 3]]``, ``{"net_arch": [64]}``, ``{net_arch: [64, 64]}``);
+    * anything else is the text itself (``particle``, ``lin_3e-4``, ``auto``).
+    """
+    t = text.strip()
+    if t in _WORDS:
+        return _WORDS[t]
+    number = _number(t)
+    if number is not None:
+        return number
+    if t[:1] in "[{(":
+        import ast
+
+        for parse in (json.loads, ast.literal_eval, _yaml_flow):
+            try:
+                return parse(t)
+            except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+                continue
+    return t
+
+
+def parse_assignment(text: str, flag: str) -> tuple[str, Any]:
+    """``"key=value"`` -> ``(key, parse_value(value))``; ``flag`` names the option in errors."""
+    if not isinstance(text, str) or "=" not in text:
+        raise ValueError(f"{flag} {text!r} is invalid: expected key=value")
+    key, raw = text.split("=", 1)
+    key = key.strip()
+    if not key:
+        raise ValueError(f"{flag} {text!r} is invalid: empty key")
+    return key, parse_value(raw)
 
 
 def split_top_level(text: str, sep: str = ",") -> list[str]:
@@ -121,7 +196,7 @@ def parse_policy(spec: str) -> PolicySpec:
     """Parse one policy spec (module docstring); unknown names raise ``ValueError`` listing
     the registered ones. Prefix arguments that name an existing local file are made absolute
     so that worker processes started elsewhere find it."""
-    from . import POLICIES
+    from baselines.controllers import POLICIES
 
     if not isinstance(spec, str) or not spec.strip():
         raise ValueError(f"policy spec {spec!r} is invalid: expected e.g. 'smc' or 'smc:k=200'")

@@ -1,7 +1,9 @@
 """Figures of the quadrotor experiment in the style of Figs. 15-20 (headless, Agg canvas).
 
-Each function returns a matplotlib ``Figure``; ``baselines.figures.save_figure`` writes it.
-The 3-D trajectories and the sliding surface use ``baselines.figures`` as the benchmark does.
+Each ``*_figure`` function returns a matplotlib ``Figure``; :func:`figure_set` draws and
+writes the experiment's whole set (with :func:`baselines.reporting.figures.save_figure`).
+The 3-D trajectories and the sliding surface use :mod:`baselines.reporting.figures`, as the
+benchmark does.
 Swarm snapshots reuse ``pairflock_env.render.draw_swarm`` (triangles along the heading, the
 pair circled with radius d_m, the leader as a star).
 """
@@ -9,6 +11,8 @@ pair circled with radius d_m, the leader as a star).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -18,6 +22,7 @@ from pairflock_env.render import draw_swarm
 
 __all__ = [
     "euler_figure",
+    "figure_set",
     "pair_error_figure",
     "snapshots_figure",
 ]
@@ -145,3 +150,77 @@ def euler_figure(t, R_des, R, title: str, zoom: tuple[float, float] = (0.0, 10.0
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     return fig
+
+
+# --------------------------------------------------------------------------- the figure set
+def _recorded_figures(key, job, seed, out: Path, dpi: int) -> list[Path]:
+    """Snapshots and 3-D trajectories of the recorded run of ``job`` (the main combination)."""
+    from .figures import save_figure, trajectories_3d_figure
+
+    cfg = job["config"]
+    times = [0.0, 4.0, 8.0, 20.0, 21.0, 35.0, 51.0, float(job["t"][-1])]
+    fig = snapshots_figure(
+        job["t"],
+        job["positions"],
+        job["velocities"],
+        job["leader_positions"],
+        cfg.pairs,
+        cfg.d_m,
+        times,
+        f"10 quadrotors, sliding mode: positions and headings (seed {seed})",
+    )
+    paths = [save_figure(fig, out / "snapshots.png", dpi=dpi)]
+    fig = trajectories_3d_figure(
+        job["positions"],
+        job["leader_positions"],
+        cfg.pairs,
+        f"3-D trajectories, {key[0]}, sliding mode (seed {seed})",
+        t=job["t"],
+        marks=(0.0, 20.0, 35.0, 50.0),
+    )
+    paths.append(save_figure(fig, out / "trajectories_3d.png", dpi=dpi))
+    return paths
+
+
+def figure_set(
+    jobs: Mapping[tuple[str, str], Mapping[str, Any]],
+    out: Path,
+    dpi: int,
+    straight_windows: Sequence[tuple[float, float]],
+    band: float,
+) -> list[Path]:
+    """The experiment's PNGs from its job results (``(dynamics, policy) -> run_job(...)``):
+    snapshots, 3-D trajectories, sliding surface, pair error and Euler angles."""
+    from .figures import save_figure, surface_panels_figure
+
+    main_key = ("quadrotor", "smc") if ("quadrotor", "smc") in jobs else next(iter(jobs))
+    j = jobs[main_key]
+    seed = j["rows"][0]["seed"]
+    paths = _recorded_figures(main_key, j, seed, out, dpi) if "positions" in j else []
+    surf = {
+        f"{dyn}, {pol}": (v["t"], v["surface"][0]) for (dyn, pol), v in jobs.items() if pol == "smc"
+    }
+    if surf:
+        fig = surface_panels_figure(
+            {k: {k: v} for k, v in surf.items()},
+            np.inf,
+            f"Sliding surface s(t), sliding mode (seed {seed})",
+            ncols=1,
+            linthresh=1.0,
+            sharey=True,
+        )
+        paths.append(save_figure(fig, out / "sliding_surface.png", dpi=dpi))
+    curves = {(dyn, pol): (v["t"], v["pair_error"][0]) for (dyn, pol), v in jobs.items()}
+    title = f"Pair distance error ||y|| - d_m (seed {seed})"
+    fig = pair_error_figure(curves, straight_windows, band, title)
+    paths.append(save_figure(fig, out / "pair_error.png", dpi=dpi))
+    if "R" in j:
+        fig = euler_figure(
+            j["t"],
+            j["R_des"],
+            j["R"],
+            f"Paired UAV No. 1, sliding mode: attitude commands (Fig. 19) "
+            f"and response (Fig. 20), seed {seed}",
+        )
+        paths.append(save_figure(fig, out / "euler_angles.png", dpi=dpi))
+    return paths

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .io import atomic_path
+from baselines.evaluation.io import atomic_path
 
 __all__ = ["VIDEO_FORMATS", "write_episode_video"]
 

@@ -47,6 +47,79 @@ class Trace:
         return self.pair_error.shape[0]
 
 
+def _empty_trace(config: PairFlockConfig, seeds: list[int], M: int, T: int, record_rows) -> Trace:
+    B, P, D = len(seeds), M // 2, config.dim
+    return Trace(
+        config=config,
+        seeds=seeds,
+        t=np.arange(T + 1) * config.dt,
+        pair_error=np.empty((B, P, T + 1)),
+        pair_distance=np.empty((B, P, T + 1)),
+        surface=np.empty((B, P, T + 1)),
+        min_separation=np.empty((B, M, T + 1)),
+        speed=np.empty((B, M, T + 1)),
+        u=np.zeros((B, M, T, D)),
+        largest_component=np.empty((B, T + 1), np.int64),
+        velocity_mismatch=np.empty((B, T + 1)),
+        collisions=np.empty((B, T + 1), np.int64),
+        clipped_steps=np.zeros((B, M), np.int64),
+        ended=np.full(B, T, np.int64),
+        positions={int(r): np.empty((T + 1, config.n_uavs, D)) for r in record_rows},
+        velocities={int(r): np.empty((T + 1, config.n_uavs, D)) for r in record_rows},
+        leader_positions={int(r): np.empty((T + 1, D)) for r in record_rows},
+    )
+
+
+def _record(tr: Trace, core: PairFlockCore, k: int, res, live: np.ndarray) -> None:
+    """Store step ``k`` of the swarms still running (``live``)."""
+    info = res.info
+    pair_rows = np.arange(0, core.n_agents, 2)
+    for name, key in (
+        ("pair_error", "pair_error"),
+        ("pair_distance", "pair_distance"),
+        ("surface", "sliding_surface"),
+    ):
+        getattr(tr, name)[live, :, k] = info[key][live][:, pair_rows]
+    tr.min_separation[live, :, k] = info["min_separation"][live]
+    tr.speed[live, :, k] = np.linalg.norm(core.p[live][:, core.agent_uavs], axis=-1)
+    tr.largest_component[live, k] = info["largest_component"][live]
+    tr.velocity_mismatch[live, k] = info["velocity_mismatch"][live]
+    tr.collisions[live, k] = info["collisions"][live]
+    if tr.positions:
+        lq, _ = core.leader_state()
+        for r in tr.positions:
+            if live[r]:
+                tr.positions[r][k] = core.q[r]
+                tr.velocities[r][k] = core.p[r]
+                tr.leader_positions[r][k] = lq[r]
+
+
+def _freeze_finished(tr: Trace, T: int) -> None:
+    """Hold the series of swarms that ended early at their last value."""
+    for b in np.flatnonzero(tr.ended < T):
+        e = tr.ended[b]
+        for arr in (tr.pair_error, tr.pair_distance, tr.surface, tr.min_separation, tr.speed):
+            arr[b, ..., e + 1 :] = arr[b, ..., e : e + 1]
+        for arr in (tr.largest_component, tr.velocity_mismatch, tr.collisions):
+            arr[b, e + 1 :] = arr[b, e]
+
+
+class _Progress:
+    """Calls ``progress(n steps)`` about 50 times per episode."""
+
+    def __init__(self, progress: Callable[[int], None] | None, T: int) -> None:
+        self.progress, self.T, self.every, self.last = progress, T, max(1, T // 50), 0
+
+    def step(self, k: int) -> None:
+        if self.progress is not None and (k - self.last >= self.every or k == self.T):
+            self.progress(k - self.last)
+            self.last = k
+
+    def finish(self) -> None:
+        if self.progress is not None and self.last < self.T:
+            self.progress(self.T - self.last)
+
+
 def rollout(
     config: PairFlockConfig,
     policy: Any,
@@ -72,60 +145,15 @@ def rollout(
     seeds = [int(s) for s in seeds]
     core = PairFlockCore(config, num_envs=len(seeds))
     B, M, D = len(seeds), core.n_agents, config.dim
-    P = M // 2
     T = config.episode_steps if steps is None else int(steps)
     res = core.reset(seed=seeds)
-    ia = core.agent_uavs
-    pair_rows = np.arange(0, M, 2)
-
-    tr = Trace(
-        config=config,
-        seeds=seeds,
-        t=np.arange(T + 1) * config.dt,
-        pair_error=np.empty((B, P, T + 1)),
-        pair_distance=np.empty((B, P, T + 1)),
-        surface=np.empty((B, P, T + 1)),
-        min_separation=np.empty((B, M, T + 1)),
-        speed=np.empty((B, M, T + 1)),
-        u=np.zeros((B, M, T, D)),
-        largest_component=np.empty((B, T + 1), np.int64),
-        velocity_mismatch=np.empty((B, T + 1)),
-        collisions=np.empty((B, T + 1), np.int64),
-        clipped_steps=np.zeros((B, M), np.int64),
-        ended=np.full(B, T, np.int64),
-        positions={int(r): np.empty((T + 1, config.n_uavs, D)) for r in record_rows},
-        velocities={int(r): np.empty((T + 1, config.n_uavs, D)) for r in record_rows},
-        leader_positions={int(r): np.empty((T + 1, D)) for r in record_rows},
-    )
+    tr = _empty_trace(config, seeds, M, T, record_rows)
     done = np.zeros(B, bool)
-
-    def record(k: int, res, live: np.ndarray) -> None:
-        info = res.info
-        for name, key in (
-            ("pair_error", "pair_error"),
-            ("pair_distance", "pair_distance"),
-            ("surface", "sliding_surface"),
-        ):
-            getattr(tr, name)[live, :, k] = info[key][live][:, pair_rows]
-        tr.min_separation[live, :, k] = info["min_separation"][live]
-        tr.speed[live, :, k] = np.linalg.norm(core.p[live][:, ia], axis=-1)
-        tr.largest_component[live, k] = info["largest_component"][live]
-        tr.velocity_mismatch[live, k] = info["velocity_mismatch"][live]
-        tr.collisions[live, k] = info["collisions"][live]
-        if tr.positions:
-            lq, _ = core.leader_state()
-            for r in tr.positions:
-                if live[r]:
-                    tr.positions[r][k] = core.q[r]
-                    tr.velocities[r][k] = core.p[r]
-                    tr.leader_positions[r][k] = lq[r]
-
-    record(0, res, ~done)
+    _record(tr, core, 0, res, ~done)
     if on_step is not None:
         on_step(0, core, res, ~done)
     limit = config.pair_accel_limit
-    report_every = max(1, T // 50)
-    last_report = 0
+    report = _Progress(progress, T)
     # SB3's predict protocol: a policy with memory (a recurrent net, or a learned policy that
     # holds its action over several control steps) gets its state back and the episode starts
     state = None
@@ -141,27 +169,18 @@ def rollout(
         live = ~done
         tr.u[live, :, k - 1] = np.clip(actions[live], -1.0, 1.0) * limit
         tr.clipped_steps[live] += res.info["action_clipped"][live]
-        record(k, res, live)
+        _record(tr, core, k, res, live)
         if on_step is not None:
             on_step(k, core, res, live)
         ended_now = live & (res.terminated | res.truncated)
-        if k < T and ended_now.any():
-            # freeze the finished swarms' series at their last value
+        if k < T and ended_now.any():  # freeze the finished swarms' series at their last value
             tr.ended[ended_now] = k
             done |= ended_now
-        if progress is not None and (k - last_report >= report_every or k == T):
-            progress(k - last_report)
-            last_report = k
+        report.step(k)
         if done.all():
             break
-    for b in np.flatnonzero(tr.ended < T):
-        e = tr.ended[b]
-        for arr in (tr.pair_error, tr.pair_distance, tr.surface, tr.min_separation, tr.speed):
-            arr[b, ..., e + 1 :] = arr[b, ..., e : e + 1]
-        for arr in (tr.largest_component, tr.velocity_mismatch, tr.collisions):
-            arr[b, e + 1 :] = arr[b, e]
-    if progress is not None and last_report < T:
-        progress(T - last_report)
+    _freeze_finished(tr, T)
+    report.finish()
     return tr
 
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from pairflock_env.pairing import sliding_surface
 
-from .policies import PairPolicy
+from .base import PairPolicy, gain_value
 
 __all__ = ["SMC_DEFAULTS", "SlidingModeController"]
 
@@ -54,24 +54,20 @@ class SlidingModeController(PairPolicy):
         super().__init__(env, **gains)
         cfg = self.config
         g = self.gains
-        g["c"] = float(cfg.surface_slope if g["c"] is None else g["c"])
+        if g["c"] is None:
+            g["c"] = cfg.surface_slope
         if g["k"] is None:
             g["k"] = SMC_DEFAULTS.get(cfg.preset, SMC_DEFAULTS["paper"])["k"]
-        g["k"] = float(g["k"])
-        g["a"] = float(cfg.attraction if g["a"] is None else g["a"])
-        g["b"] = float(cfg.consensus if g["b"] is None else g["b"])
+        g["a"] = cfg.attraction if g["a"] is None else g["a"]
+        g["b"] = cfg.consensus if g["b"] is None else g["b"]
         for name in ("c", "k"):
-            if not np.isfinite(g[name]) or g[name] <= 0:
-                raise ValueError(f"{name}={g[name]!r} is invalid: must be a finite number > 0")
+            g[name] = gain_value(name, g[name], minimum=0.0, allow_minimum=False)
         for name in ("a", "b"):
-            if not np.isfinite(g[name]) or g[name] < 0:
-                raise ValueError(f"{name}={g[name]!r} is invalid: must be a finite number >= 0")
-        phi = g["boundary_layer"]
-        if phi is not None:
-            phi = float(phi)
-            if not np.isfinite(phi) or phi <= 0:
-                raise ValueError(f"boundary_layer={phi!r} is invalid: must be > 0 or None")
-            g["boundary_layer"] = phi
+            g[name] = gain_value(name, g[name], minimum=0.0, allow_minimum=True)
+        if g["boundary_layer"] is not None:
+            g["boundary_layer"] = gain_value(
+                "boundary_layer", g["boundary_layer"], minimum=0.0, allow_minimum=False
+            )
 
     def pair_term(self, y: np.ndarray, ydot: np.ndarray, n_shared: np.ndarray, d_m: np.ndarray):
         """f^x of eq. 28 (m/s^2) for offset y, rate y', shared count N (..., 1), d_m (...)."""

@@ -11,20 +11,19 @@ from typing import Any
 
 import numpy as np
 
-from .policies import PairPolicy
+from .base import PairPolicy, gain_value
 
 __all__ = ["ProportionalController"]
 
 
 class ProportionalController(PairPolicy):
+    """Eq. 44 (element-wise sign); see the module docstring."""
+
     GAINS = {"k_p": (1.0, "proportional gain k_p (1/s^2); the paper does not state it")}
 
     def __init__(self, env: Any, **gains: Any) -> None:
         super().__init__(env, **gains)
-        k = float(self.gains["k_p"])
-        if not np.isfinite(k) or k <= 0:
-            raise ValueError(f"k_p={self.gains['k_p']!r} is invalid: must be a finite number > 0")
-        self.gains["k_p"] = k
+        self.gains["k_p"] = gain_value("k_p", self.gains["k_p"], minimum=0.0, allow_minimum=False)
 
     def accel(self, obs: np.ndarray) -> np.ndarray:
         L = self.layout

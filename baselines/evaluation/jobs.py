@@ -10,7 +10,6 @@ return identical numbers, and ``tests/test_benchmark.py`` checks both properties
 from __future__ import annotations
 
 import dataclasses
-import os
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
@@ -18,17 +17,12 @@ import numpy as np
 
 from pairflock_env import PairFlockConfig
 
+from .parallel import imap_unordered, pin_threads
 from .specs import PolicySpec
 
-__all__ = ["BACKENDS", "Job", "make_jobs", "pin_threads", "run_job", "run_jobs"]
+__all__ = ["BACKENDS", "Job", "make_jobs", "run_job", "run_jobs"]
 
 BACKENDS = ("local", "ray")
-
-
-def pin_threads() -> None:
-    """One BLAS/OpenMP thread per process: the parallelism is across processes."""
-    for var in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -120,26 +114,8 @@ def run_job(job: Job) -> dict[str, Any]:
 
 
 def _local(jobs: Sequence[Job], workers: int) -> Iterator[tuple[Job, dict[str, Any]]]:
-    if workers <= 1 or len(jobs) == 1:
-        for job in jobs:
-            yield job, run_job(job)
-        return
-    import multiprocessing as mp
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-
-    # fresh worker processes rather than forks of this one: a fork of a process whose torch /
-    # OpenMP thread pools are running (the driver may have loaded a learned policy) can hang
-    methods = mp.get_all_start_methods()
-    ctx = mp.get_context("forkserver" if "forkserver" in methods else "spawn")
-    with ProcessPoolExecutor(max_workers=min(workers, len(jobs)), mp_context=ctx) as pool:
-        futs = {pool.submit(run_job, job): job for job in jobs}
-        try:
-            for f in as_completed(futs):
-                yield futs[f], f.result()
-        except BaseException:
-            for f in futs:
-                f.cancel()
-            raise
+    for i, result in imap_unordered(run_job, [(job,) for job in jobs], workers):
+        yield jobs[i], result
 
 
 def _ray(

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import numbers
 from typing import Any
 
 import numpy as np
 
 from pairflock_env import ObsLayout, PairFlockConfig
 
-__all__ = ["PairPolicy", "ZeroPolicy", "resolve_env"]
+__all__ = ["PairPolicy", "ZeroPolicy", "check_observation", "gain_value", "resolve_env"]
 
 
 def resolve_env(env: Any) -> tuple[PairFlockConfig, ObsLayout]:
@@ -27,11 +28,35 @@ def resolve_env(env: Any) -> tuple[PairFlockConfig, ObsLayout]:
 
 
 def check_observation(observation: Any, size: int) -> np.ndarray:
-    """``observation`` as float64, shaped (size,) or (n, size); a clear error otherwise."""
-    obs = np.asarray(observation, dtype=np.float64)
+    """``observation`` as float64, shaped (size,) or (n, size), every entry finite; a
+    TypeError (not numbers) or ValueError (shape, NaN/inf) naming it otherwise."""
+    try:
+        obs = np.asarray(observation, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise TypeError(f"observation is invalid: expected an array of numbers ({e})") from None
     if obs.ndim not in (1, 2) or obs.shape[-1] != size:
         raise ValueError(f"observation has shape {obs.shape}; expected ({size},) or (n, {size})")
+    if not np.isfinite(obs).all():
+        rows = np.flatnonzero(~np.isfinite(obs.reshape(-1, size)).all(axis=1)).tolist()
+        raise ValueError(
+            f"observation holds NaN or inf (rows {rows}); a pairflock observation is finite"
+        )
     return obs
+
+
+def gain_value(name: str, value: Any, *, minimum: float, allow_minimum: bool) -> float:
+    """A gain as a finite float ``> minimum`` (or ``>= minimum`` with ``allow_minimum``);
+    TypeError for a non-number, ValueError for a bad number, both naming the gain."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(
+            f"{name}={value!r} is invalid: must be a number, not {type(value).__name__}"
+        )
+    v = float(value)
+    ok = np.isfinite(v) and (v >= minimum if allow_minimum else v > minimum)
+    if not ok:
+        op = ">=" if allow_minimum else ">"
+        raise ValueError(f"{name}={v!r} is invalid: must be a finite number {op} {minimum:g}")
+    return v
 
 
 class PairPolicy:
@@ -49,9 +74,13 @@ class PairPolicy:
         self.config, self.layout = resolve_env(env)
         unknown = sorted(set(gains) - set(self.GAINS))
         if unknown:
+            import difflib
+
             valid = ", ".join(self.GAINS) or "none"
-            raise ValueError(
-                f"unknown gain(s) {unknown} for {type(self).__name__}; valid gains: {valid}"
+            hints = [h for u in unknown for h in difflib.get_close_matches(u, self.GAINS, n=1)]
+            extra = f" (did you mean {', '.join(map(repr, hints))}?)" if hints else ""
+            raise TypeError(
+                f"unknown gain(s) {unknown} for {type(self).__name__}{extra}; valid gains: {valid}"
             )
         self.gains = {k: gains.get(k, self._default(k)) for k in self.GAINS}
 
@@ -68,7 +97,8 @@ class PairPolicy:
         episode_start: np.ndarray | None = None,
         deterministic: bool = True,
     ) -> tuple[np.ndarray, Any]:
-        """Action(s) for one observation (obs_size,) or a batch (n, obs_size)."""
+        """Action(s) for one observation (obs_size,) or a batch (n, obs_size); a NaN/inf,
+        non-numeric or wrongly shaped observation raises (ValueError / TypeError)."""
         u = self.accel(check_observation(observation, self.layout.size))
         return (u / self.config.pair_accel_limit).astype(np.float32), state
 

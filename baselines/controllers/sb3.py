@@ -22,7 +22,7 @@ import numpy as np
 
 from pairflock_env.decision import DecisionHold
 
-from .policies import check_observation, resolve_env
+from .base import check_observation, resolve_env
 
 __all__ = ["ALGORITHMS", "METADATA_KEY", "SB3PairPolicy", "load_sb3_policy", "read_metadata"]
 
@@ -136,7 +136,7 @@ class SB3PairPolicy:
 def load_sb3_policy(path: str, env: Any, **gains: Any) -> SB3PairPolicy:
     """Factory behind the ``"sb3:"`` prefix of :func:`baselines.make_pair_policy`."""
     if gains:
-        raise ValueError(f"an sb3 policy takes no gains, got {sorted(gains)}")
+        raise TypeError(f"an sb3 policy takes no gains, got {sorted(gains)}")
     if not path:
         raise ValueError("name 'sb3:' needs a model path, e.g. 'sb3:runs/ppo/final_model.zip'")
     return SB3PairPolicy.load(path, env)

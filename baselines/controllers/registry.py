@@ -1,0 +1,58 @@
+"""The controller registry: names (and ``"prefix:"`` entries) -> factories, and
+:func:`make_pair_policy`, which builds a controller by name."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from .base import ZeroPolicy
+from .proportional import ProportionalController
+from .sliding_mode import SlidingModeController
+
+__all__ = ["POLICIES", "make_pair_policy"]
+
+
+def _sb3_policy(path: str, env: Any, **gains: Any) -> Any:
+    """``"sb3:<path>"``: a model saved by ``python -m train`` (imports SB3/torch lazily)."""
+    from .sb3 import load_sb3_policy
+
+    return load_sb3_policy(path, env, **gains)
+
+
+#: name -> factory(env, **gains); a prefix entry "name:" takes the text after the colon
+POLICIES: dict[str, Callable[..., Any]] = {
+    "smc": SlidingModeController,
+    "proportional": ProportionalController,
+    "zero": ZeroPolicy,
+    "sb3:": _sb3_policy,
+}
+
+
+def make_pair_policy(name: str, env: Any, **gains: Any) -> Any:
+    """Build a pair controller by name for ``env`` (any pairflock view, core or config).
+
+    The result has SB3's ``predict(observation, state=None, episode_start=None,
+    deterministic=True) -> (action, state)`` and acts per agent from that agent's
+    observation.
+    """
+    if not isinstance(name, str):
+        raise TypeError(f"name={name!r} is invalid: must be a string such as 'smc'")
+    if ":" in name:
+        prefix, arg = name.split(":", 1)
+        factory = POLICIES.get(prefix + ":")
+        if factory is None:
+            raise ValueError(
+                f"name={name!r} is invalid: unknown prefix {prefix!r}; valid: "
+                f"{', '.join(sorted(POLICIES))}"
+            )
+        return factory(arg, env, **gains)
+    if name not in POLICIES:
+        import difflib
+
+        hint = difflib.get_close_matches(name, list(POLICIES), n=1)
+        extra = f" (did you mean {hint[0]!r}?)" if hint else ""
+        raise ValueError(
+            f"name={name!r} is invalid{extra}: must be one of {', '.join(sorted(POLICIES))}"
+        )
+    return POLICIES[name](env, **gains)

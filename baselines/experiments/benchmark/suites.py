@@ -1,0 +1,98 @@
+"""Named benchmark suites (defaults of a run) and the sweep shortcut options."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+__all__ = ["SHORTCUTS", "SUITES", "Suite"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Suite:
+    """Defaults of a named benchmark (every field can be overridden on the command line)."""
+
+    description: str
+    preset: str
+    policies: tuple[str, ...]
+    seeds: int
+    base: tuple[tuple[str, Any], ...] = ()
+    grid: tuple[tuple[str, tuple[Any, ...]], ...] = ()
+    scenarios: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
+    check: bool = False
+    snapshots: bool = True
+
+
+SUITES: dict[str, Suite] = {
+    "paper": Suite(
+        "Sec. VI-A: sliding mode vs the normal method vs no pair term, N = 20/50/100, "
+        "10 seeds, with the acceptance checks",
+        preset="paper",
+        policies=("smc", "proportional", "zero"),
+        seeds=10,
+        grid=(("n_uavs", (20, 50, 100)),),
+        check=True,
+    ),
+    "robustness": Suite(
+        "what the proofs assume away, N = 50, 10 seeds: sensor noise on y and y', partner "
+        "delay, random acceleration disturbance",
+        preset="paper",
+        policies=("smc", "proportional"),
+        seeds=10,
+        base=(("n_uavs", 50),),
+        scenarios=(
+            ("nominal", ()),
+            ("noise y 0.3 m", (("obs_noise_position", 0.3),)),
+            ("noise y 1 m", (("obs_noise_position", 1.0),)),
+            ("noise y 3 m", (("obs_noise_position", 3.0),)),
+            ("noise y' 1 m/s", (("obs_noise_velocity", 1.0),)),
+            ("noise y' 3 m/s", (("obs_noise_velocity", 3.0),)),
+            ("noise y' 10 m/s", (("obs_noise_velocity", 10.0),)),
+            ("delay 3 steps", (("partner_delay", 3),)),
+            ("delay 10 steps", (("partner_delay", 10),)),
+            ("delay 30 steps", (("partner_delay", 30),)),
+            ("disturbance 3 m/s^2", (("disturbance_std", 3.0),)),
+            ("disturbance 30 m/s^2", (("disturbance_std", 30.0),)),
+            ("disturbance 100 m/s^2", (("disturbance_std", 100.0),)),
+        ),
+        snapshots=False,
+    ),
+    "quick": Suite(
+        "a sanity run in seconds: N = 20, 15 s, 3 seeds, smc vs proportional",
+        preset="paper",
+        policies=("smc", "proportional"),
+        seeds=3,
+        base=(("n_uavs", 20), ("horizon", 15.0)),
+    ),
+    "quadrotor": Suite(
+        "Sec. VI-B: 10 quadrotors (preset 'paper-quadrotor', docs/quadrotor.md), 5 seeds",
+        preset="paper-quadrotor",
+        policies=("smc", "proportional", "zero"),
+        seeds=5,
+    ),
+}
+
+#: sweep shortcuts: option -> (config field, type, help)
+SHORTCUTS = (
+    ("--n-uavs", "n_uavs", int, "swarm sizes N"),
+    ("--dim", "dim", int, "spatial dimension (2 or 3)"),
+    ("--d-m", "d_m", float, "desired pair distance d_m (m)"),
+    (
+        "--pairs",
+        "pairs",
+        int,
+        "number of pairs K: UAVs (0, 1), (2, 3), ... (K > 2^(dim-1) needs --set init=random)",
+    ),
+    ("--dynamics", "dynamics", str, "vehicle model (see PairFlockConfig.dynamics)"),
+    ("--dt", "dt", float, "control period (s)"),
+    ("--horizon", "horizon", float, "episode length (s)"),
+    ("--noise-position", "obs_noise_position", float, "std of the noise on the observed y (m)"),
+    ("--noise-velocity", "obs_noise_velocity", float, "std of the noise on the observed y' (m/s)"),
+    ("--delay", "partner_delay", int, "delay of the partner's state (control steps)"),
+    (
+        "--disturbance",
+        "disturbance_std",
+        float,
+        "std of a random acceleration on every UAV (m/s^2)",
+    ),
+)

@@ -1,0 +1,312 @@
+"""Every acceptance threshold of the project, in one place, and the checks that apply them.
+
+* :data:`PAPER` - the Sec. VI-A reproduction (particle swarm, ``python -m
+  baselines.reproduce --check``; docs/benchmark.md);
+* :data:`QUADROTOR` - the Sec. VI-B experiment (``python -m baselines.quadrotor_experiment
+  --check``; docs/quadrotor.md);
+* :data:`LEARNED` - the trained pair policy (``python -m train.evaluate --check``, and the
+  score training keeps its best model by; docs/learning.md).
+
+A check returns a list of ``(criterion, ok, measured)``; a criterion whose text ends in
+``(aim)`` is reported (met / missed) but never fails a ``--check``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from .tables import md_escape, stat_cell
+
+__all__ = [
+    "LEARNED",
+    "PAPER",
+    "QUADROTOR",
+    "Check",
+    "LearnedTargets",
+    "PaperCriteria",
+    "QuadrotorCriteria",
+    "all_passed",
+    "check_learned",
+    "check_paper_claims",
+    "check_quadrotor",
+    "criteria_lines",
+    "criteria_table",
+    "learned_score",
+    "verdict",
+]
+
+#: (criterion, ok, measured)
+Check = tuple[str, bool, str]
+
+
+@dataclasses.dataclass(frozen=True)
+class PaperCriteria:
+    """Sec. VI-A, per scenario and every seed (times in s, distances in m)."""
+
+    settle: tuple[float, float] = (1.5, 3.0)  # sliding mode: s settles within this window
+    band: tuple[float, float] = (3.0, 5.0)  # ... and is in the 0.5 m band for good within this
+    steady_mean_error: float = 0.20  # ... steady mean |error| at most this
+    proportional_ratio: float = 5.0  # proportional median error >= this x sliding mode's
+    zero_error: float = 10.0  # without a pair term the pair stays at least this far off
+
+
+@dataclasses.dataclass(frozen=True)
+class QuadrotorCriteria:
+    """Sec. VI-B, sliding mode on the quadrotor, every seed (times in s, distances in m)."""
+
+    band: float = 0.5  # |pair error| band
+    band_entry_by: float = 10.0  # first in the band by this time
+    straight_max: float = 0.5  # max |error| in straight flight
+    turn_peak_max: float = 0.6  # peak |error| in and after the turns
+    min_distance: float = 0.5  # no two UAVs closer than this
+    velocity_tolerance: float = 0.6  # m/s: unpaired UAVs' speed error to the leader
+    attitude_cost: float = 0.35  # quadrotor minus particle straight-flight max error
+
+
+@dataclasses.dataclass(frozen=True)
+class LearnedTargets:
+    """The learned pair policy at N = 20, corners start (distances in m, times in s)."""
+
+    median_error: float = 0.05  # median over seeds of the steady mean |error|
+    max_error: float = 0.1  # no seed's steady mean |error| above this
+    band_by: float = 6.0  # in the 0.5 m band for good by this time on every seed
+    min_separation: float = 1.0  # aim: paired UAVs keep this far from every other UAV
+
+
+PAPER = PaperCriteria()
+QUADROTOR = QuadrotorCriteria()
+LEARNED = LearnedTargets()
+
+
+# --------------------------------------------------------------------------- reporting
+def verdict(criterion: str, ok: bool) -> str:
+    """pass/FAIL for a criterion; met/missed for an aim (an aim never fails ``--check``)."""
+    if criterion.endswith("(aim)"):
+        return "met" if ok else "missed"
+    return "pass" if ok else "FAIL"
+
+
+def all_passed(checks: Sequence[Check]) -> bool:
+    """True when there are checks and none but aims failed."""
+    return bool(checks) and all(ok for c, ok, _ in checks if not c.endswith("(aim)"))
+
+
+def criteria_table(checks: Sequence[Check]) -> list[str]:
+    """Markdown lines of a ``| criterion | result | measured |`` table."""
+    lines = ["| criterion | result | measured |", "|---|---|---|"]
+    return lines + [f"| {md_escape(c)} | {verdict(c, ok)} | {d} |" for c, ok, d in checks]
+
+
+def criteria_lines(checks: Sequence[Check]) -> list[str]:
+    """``[pass] criterion: measured`` lines for the terminal."""
+    return [f"[{verdict(c, ok)}] {c}: {d}" for c, ok, d in checks]
+
+
+# --------------------------------------------------------------------------- Sec. VI-A
+def _scenario(r: Mapping[str, Any]) -> str:
+    return r["scenario"] if "scenario" in r else f"N={r['n_uavs']}"
+
+
+def _values(rows: Sequence[Mapping[str, Any]], key: str) -> np.ndarray:
+    return np.array([r[key] for r in rows])
+
+
+def _paper_smc(sc: str, smc, prop, c: PaperCriteria) -> list[Check]:
+    s, b, e = (_values(smc, k) for k in ("s_settle_time", "band_time", "ss_mean_error"))
+    (s_lo, s_hi), (b_lo, b_hi) = c.settle, c.band
+    out = [
+        (
+            f"{sc} smc: s settles in {s_lo}-{s_hi} s on every seed",
+            bool(np.all((s >= s_lo) & (s <= s_hi))),
+            stat_cell(s, "{:.2f}") + " s",
+        ),
+        (
+            f"{sc} smc: in the 0.5 m band for good at {b_lo}-{b_hi} s on every seed",
+            bool(np.all((b >= b_lo) & (b <= b_hi))),
+            stat_cell(b, "{:.2f}") + " s",
+        ),
+        (
+            f"{sc} smc: steady mean error <= {c.steady_mean_error:.2f} m on every seed",
+            bool(np.all(e <= c.steady_mean_error)),
+            f"max {np.max(e):.3f} m",
+        ),
+    ]
+    if prop:
+        pm = float(np.median(_values(prop, "ss_mean_error")))
+        sm = float(np.median(e))
+        out.append(
+            (
+                f"{sc} proportional median error >= {c.proportional_ratio:g}x smc median",
+                pm >= c.proportional_ratio * sm,
+                f"{pm:.3f} m vs {sm:.3f} m ({pm / sm:.1f}x)",
+            )
+        )
+    return out
+
+
+def check_paper_claims(
+    rows: Sequence[Mapping[str, Any]], criteria: PaperCriteria = PAPER
+) -> list[Check]:
+    """The acceptance criteria of the Sec. VI-A reproduction, per scenario (every seed)."""
+    out: list[Check] = []
+    for sc in dict.fromkeys(_scenario(r) for r in rows):
+        sel = [r for r in rows if _scenario(r) == sc]
+        by = {p: [r for r in sel if r["policy"] == p] for p in ("smc", "proportional", "zero")}
+        if by["smc"]:
+            out += _paper_smc(sc, by["smc"], by["proportional"], criteria)
+        if by["zero"]:
+            z = _values(by["zero"], "ss_mean_error")
+            out.append(
+                (
+                    f"{sc} zero: steady mean error >= {criteria.zero_error:g} m on every seed",
+                    bool(np.all(z >= criteria.zero_error)),
+                    f"min {np.min(z):.1f} m",
+                )
+            )
+    return out
+
+
+# --------------------------------------------------------------------------- Sec. VI-B
+def _range_s(v: np.ndarray) -> str:
+    return f"{np.nanmin(v):.2f}-{np.nanmax(v):.2f} s" if np.isfinite(v).any() else "never"
+
+
+def check_quadrotor(
+    rows: Sequence[Mapping[str, Any]], criteria: QuadrotorCriteria = QUADROTOR
+) -> list[Check]:
+    """The Sec. VI-B criteria for sliding mode on the quadrotor, every seed; the rows are
+    those of :func:`baselines.experiments.quadrotor_runs.run_job` (both vehicle models)."""
+    c = criteria
+    smc = sorted(
+        (r for r in rows if r["dynamics"] == "quadrotor" and r["policy"] == "smc"),
+        key=lambda r: r["seed"],
+    )
+    if not smc:
+        return []
+
+    def arr(key: str) -> np.ndarray:
+        return np.array([float(r[key]) for r in smc])
+
+    entry, s, tp = arr("band_entry_time"), arr("straight_max_error"), arr("turn_peak_error")
+    md, vm, crashed = arr("min_distance"), arr("velocity_mismatch"), arr("crashed")
+    full_length = np.all(arr("steps_run") == smc[0]["steps_run"])
+    out = [
+        (
+            f"smc: first in the {c.band} m band within {c.band_entry_by:g} s",
+            bool(np.all(entry <= c.band_entry_by)),
+            _range_s(entry),
+        ),
+        (
+            f"smc: max abs pair error <= {c.straight_max} m in [15,20], [27,50], [57,65] s",
+            bool(np.all(s <= c.straight_max)),
+            f"max {np.max(s):.3f} m",
+        ),
+        (
+            f"smc: peak abs pair error in the turns <= {c.turn_peak_max} m",
+            bool(np.all(tp <= c.turn_peak_max)),
+            f"max {np.max(tp):.3f} m",
+        ),
+        (
+            f"smc: no two UAVs closer than {c.min_distance} m",
+            bool(np.all(md >= c.min_distance)),
+            f"min {np.min(md):.2f} m",
+        ),
+        (
+            f"smc: unpaired velocity within {c.velocity_tolerance} m/s of the leader "
+            "in [35,50], [60,65] s",
+            bool(np.all(vm <= c.velocity_tolerance)),
+            f"max {np.max(vm):.3f} m/s",
+        ),
+        (
+            "smc: no crash, every episode runs 65 s",
+            bool(np.all(crashed == 0) and full_length),
+            f"{int(crashed.sum())} crashes",
+        ),
+    ]
+    part = {r["seed"]: r for r in rows if r["dynamics"] == "particle" and r["policy"] == "smc"}
+    if part and all(r["seed"] in part for r in smc):
+        cost = s - np.array([float(part[r["seed"]]["straight_max_error"]) for r in smc])
+        out.append(
+            (
+                f"smc: attitude loop costs <= {c.attitude_cost} m over the particle "
+                "(straight-flight max error, same seed)",
+                bool(np.all(cost <= c.attitude_cost)),
+                f"{np.min(cost):+.3f} to {np.max(cost):+.3f} m",
+            )
+        )
+    return out
+
+
+# --------------------------------------------------------------------------- learned policy
+def check_learned(
+    rows: Sequence[Mapping[str, Any]],
+    n_uavs: int = 20,
+    init: str = "corners",
+    targets: LearnedTargets = LEARNED,
+) -> list[Check]:
+    """The targets for the learned policy (rows of ``policy == "learned"``) at (N, init)."""
+    sel = [
+        r for r in rows if r["policy"] == "learned" and r["n_uavs"] == n_uavs and r["init"] == init
+    ]
+    if not sel:
+        return []
+    t = targets
+    e = _values(sel, "ss_mean_error")
+    b = np.array([r["band_time"] for r in sel], dtype=float)
+    s = _values(sel, "min_pair_separation")
+    never = int(np.sum(~np.isfinite(b)))
+    band_max = np.nanmax(b) if np.isfinite(b).any() else math.nan
+    where = f"N={n_uavs} {init}"
+    return [
+        (
+            f"{where}: median steady-state abs error <= {t.median_error:g} m",
+            bool(np.median(e) <= t.median_error),
+            f"{np.median(e):.4f} m",
+        ),
+        (
+            f"{where}: no seed above {t.max_error:g} m",
+            bool(np.all(e <= t.max_error)),
+            f"max {e.max():.4f} m",
+        ),
+        (
+            f"{where}: in the 0.5 m band for good within {t.band_by:g} s on every seed",
+            bool(never == 0 and np.all(b <= t.band_by)),
+            f"max {band_max:.2f} s" + (f", never on {never} seeds" if never else ""),
+        ),
+        (
+            f"{where}: min pair-to-other distance >= {t.min_separation:g} m on every seed (aim)",
+            bool(np.all(s >= t.min_separation)),
+            f"min {s.min():.2f} m; {int(np.sum(s < t.min_separation))}/{len(s)} seeds below",
+        ),
+    ]
+
+
+#: score of a run that never enters the band (every other term is at most a few units)
+NEVER_IN_BAND_PENALTY = 10.0
+
+
+def learned_score(summary: Mapping[str, float], targets: LearnedTargets = LEARNED) -> float:
+    """Lower is better: the learned policy's targets as one number (0 = every target met).
+
+    ``max(0, median err - 0.05)/0.05 + max(0, max err - 0.1)/0.1 + max(0, band - 6)/6
+    + max(0, 1 - min separation)`` plus the median error itself as a tie-breaker, over the
+    summary of :func:`train.callbacks.summarize_metrics`.
+    """
+    t = targets
+    band = summary["band_time_max"]
+    if math.isfinite(band):
+        band_pen = max(0.0, band - t.band_by) / t.band_by
+    else:
+        band_pen = NEVER_IN_BAND_PENALTY
+    return (
+        max(0.0, summary["ss_error_median"] - t.median_error) / t.median_error
+        + max(0.0, summary["ss_error_max"] - t.max_error) / t.max_error
+        + band_pen
+        + max(0.0, t.min_separation - summary["min_separation_min"])
+        + summary["ss_error_median"]
+    )

@@ -1,0 +1,95 @@
+"""The SB3 model of a run: hyperparameter schedules, construction, loading, saving."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from baselines.controllers.sb3 import METADATA_KEY
+
+from .settings import RunSettings
+
+__all__ = [
+    "METADATA_KEY",
+    "build_model",
+    "linear_schedule",
+    "load_model",
+    "metadata",
+    "resolve_schedules",
+    "save_model_atomic",
+]
+
+
+def linear_schedule(start: float):
+    """SB3 schedule falling linearly from ``start`` to 0 over training (rl-zoo's ``lin_<v>``)."""
+
+    def schedule(progress_remaining: float) -> float:
+        return progress_remaining * start
+
+    schedule.start = start  # type: ignore[attr-defined]
+    return schedule
+
+
+def resolve_schedules(hp: dict[str, Any]) -> dict[str, Any]:
+    """``"lin_3e-4"`` for learning_rate / clip_range means a linear decay from 3e-4 to 0."""
+    out = dict(hp)
+    for key in ("learning_rate", "clip_range"):
+        v = out.get(key)
+        if isinstance(v, str) and v.startswith("lin_"):
+            try:
+                start = float(v[4:])
+            except ValueError:
+                raise ValueError(
+                    f"hyperparameter {key}={v!r} is invalid: use lin_<number>"
+                ) from None
+            if start <= 0:
+                raise ValueError(f"hyperparameter {key}={v!r} is invalid: the start must be > 0")
+            out[key] = linear_schedule(start)
+    return out
+
+
+def build_model(settings: RunSettings, venv: Any) -> Any:
+    """A fresh SB3 model of the run's algorithm and hyperparameters, seeded by the run."""
+    import stable_baselines3 as sb3
+
+    hp = resolve_schedules(settings.algo_hyperparameters())
+    cls = getattr(sb3, settings.algo.upper())
+    if settings.algo == "td3":
+        from stable_baselines3.common.noise import NormalActionNoise
+
+        std = float(hp.pop("action_noise_std"))
+        D = venv.action_space.shape[0]
+        hp["action_noise"] = NormalActionNoise(np.zeros(D), std * np.ones(D))
+    return cls("MlpPolicy", venv, seed=settings.seed, device="cpu", verbose=0, **hp)
+
+
+def load_model(settings: RunSettings, ckpt: Path, venv: Any) -> Any:
+    """The model of checkpoint ``ckpt`` on ``venv`` (with its replay buffer, if any)."""
+    import stable_baselines3 as sb3
+
+    cls = getattr(sb3, settings.algo.upper())
+    # force_reset=False keeps the saved last observation: the env continues, not resets
+    model = cls.load(str(ckpt / "model.zip"), env=venv, device="cpu", force_reset=False)
+    if (ckpt / "replay_buffer.pkl").is_file():
+        model.load_replay_buffer(str(ckpt / "replay_buffer.pkl"))
+    return model
+
+
+def metadata(settings: RunSettings, interface: Any, cfg: Any) -> dict[str, Any]:
+    """What a saved model carries (``model.pairflock``): algorithm, interface, task, settings."""
+    return {
+        "algo": settings.algo.upper(),
+        "interface": interface.to_dict(),
+        "config": cfg.to_dict(),
+        "settings": settings.to_dict(),
+    }
+
+
+def save_model_atomic(model: Any, path: Path) -> None:
+    """``model.save`` to a temporary file next to ``path``, then renamed onto it."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp.zip")
+    model.save(tmp)
+    os.replace(tmp, path)
