@@ -23,9 +23,20 @@ thread pinning of :mod:`baselines.evaluation.parallel`) does not load numpy firs
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ._moved import install_aliases
+
+if TYPE_CHECKING:  # the names as static tools (type checkers, the API docs) see them
+    from .controllers import (
+        POLICIES,
+        PairPolicy,
+        ProportionalController,
+        SlidingModeController,
+        ZeroPolicy,
+        make_pair_policy,
+        resolve_env,
+    )
 
 __all__ = [
     "POLICIES",

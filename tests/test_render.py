@@ -40,7 +40,7 @@ def test_human_mode_without_a_display_warns_instead_of_failing():
 
 
 def test_video_writer_checks_its_arguments(tmp_path):
-    from baselines.video import write_episode_video
+    from baselines.reporting.video import write_episode_video
 
     t = np.arange(3) * 0.1
     pos = np.stack([Q] * 3)

@@ -12,7 +12,7 @@ from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, VecCheckNan, VecEnv, VecMonitor
 
 from baselines import make_pair_policy
-from baselines.rollout import rollout, trace_metrics
+from baselines.evaluation.rollout import rollout, trace_metrics
 from pairflock_env import ENV_ID, make_config, parallel_env
 from pairflock_env.envs import PairFlockSB3VecEnv
 

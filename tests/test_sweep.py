@@ -201,7 +201,7 @@ def test_dotted_keys_map_onto_run_settings():
     s = t.settings
     assert (s["env"]["n_uavs"], s["num_swarms"], s["seed"], s["total_steps"]) == (10, 4, 4, 1000)
     assert s["hyperparameters"]["policy_kwargs"]["net_arch"] == [128, 128]
-    assert s["eval_env"] == {"horizon": 5.0} and s["frame_params"]["w_band"] == 0.5
+    assert s["eval_env"] == {"horizon": 5.0} and s["interface_params"]["w_band"] == 0.5
     assert t.label == "env.n_uavs=10 hp.policy_kwargs.net_arch=[128,128] num_swarms=4"
 
 

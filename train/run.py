@@ -60,10 +60,10 @@ def make_vec_env(settings: RunSettings, seed_offset: int = 0):
     """The native SB3 VecEnv of the training task, wrapped in a VecMonitor."""
     from stable_baselines3.common.vec_env import VecMonitor
 
-    from pairflock_env.envs.sb3 import PairFlockVecEnv
+    from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
 
     ss = np.random.SeedSequence([settings.seed, seed_offset])
-    env = PairFlockVecEnv(
+    env = PairFlockSB3VecEnv(
         settings.preset,
         num_swarms=settings.num_swarms,
         seed=ss,

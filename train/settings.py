@@ -58,10 +58,9 @@ RENAMED_KEYS = {"frame": "interface", "frame_params": "interface_params"}
 def env_interface_kwargs(interface: str, params: Mapping[str, Any]) -> dict[str, Any]:
     """The keyword arguments that choose the learning interface on the env constructors.
 
-    The one place that knows the env's keyword names (``frame=``/``frame_params=`` today,
-    ``interface=``/``interface_params=`` once the views take those).
+    The one place that knows the env's keyword names.
     """
-    return {"frame": interface, "frame_params": dict(params)}
+    return {"interface": interface, "interface_params": dict(params)}
 
 
 def _renamed(data: Mapping[str, Any], where: str, category: type[Warning] | None) -> dict:

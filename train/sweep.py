@@ -38,7 +38,7 @@ EPILOG = textwrap.dedent(
       eval_env.FIELD        evaluation-only override, e.g. eval_env.horizon=20
       hp.NAME[.SUB]         SB3 hyperparameter, e.g. hp.learning_rate=3e-4,1e-4 or
                             hp.policy_kwargs.net_arch=[64,64],[128,128]
-      frame.NAME            learning-interface parameter, e.g. frame.w_band=0.1,0.2
+      interface.NAME        learning-interface parameter, e.g. interface.w_band=0.1,0.2
       FIELD                 top-level setting, e.g. num_swarms=16,32 or eval_every=500000
     --search optuna draws settings instead: KEY=a,b,c (choice), KEY=uniform:LO:HI,
     KEY=loguniform:LO:HI, KEY=int:LO:HI; each draw is trained on every seed.
@@ -239,7 +239,7 @@ def _prepare(args: argparse.Namespace):
 
 
 def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
-    from baselines.io import run_record, write_json
+    from baselines.evaluation.io import run_record, write_json
 
     from .sweep_local import Progress
     from .sweep_plan import SWEEP_FILE
@@ -332,7 +332,7 @@ def _gather(plan, trials, out: Path, outcome) -> list[dict[str, Any]]:
 
 
 def _write_outputs(args, plan, out: Path, results, total: int, wall: float) -> None:
-    from baselines.io import atomic_write_text, write_csv
+    from baselines.evaluation.io import atomic_write_text, write_csv
 
     from .sweep_stats import csv_rows, curves_figure, summary_markdown
 

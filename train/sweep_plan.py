@@ -9,8 +9,9 @@ onto the settings::
     eval_env.horizon=20            evaluation-only override (``eval_env:``)
     hp.learning_rate=1e-4          SB3 hyperparameter (``hyperparameters:``), nested with dots:
                                    hp.policy_kwargs.net_arch=[64,64]
-    frame.w_band=0.5               learning-interface parameter (``frame_params:``; also
-                                   ``frame_params.``, ``interface.``, ``interface_params.``)
+    interface.w_band=0.5           learning-interface parameter (``interface_params:``; also
+                                   ``interface_params.``, and the old ``frame.``,
+                                   ``frame_params.``)
     num_swarms=16, algo=sac, ...   a top-level RunSettings field
 
 Every value is validated by :func:`train.settings.settings_from_sources`, the code path of
@@ -54,48 +55,28 @@ _SECTIONS = {
     "eval_env": "eval_env",
     "hp": "hp",
     "hyperparameters": "hp",
-    "frame": "frame",
-    "frame_params": "frame",
-    "interface": "frame",
-    "interface_params": "frame",
+    "interface": "interface",
+    "interface_params": "interface",
+    "frame": "interface",  # the old names of the two above
+    "frame_params": "interface",
 }
 
 #: search-space kinds of ``--grid KEY=KIND:LOW:HIGH`` (Optuna search only)
 DOMAINS = ("uniform", "loguniform", "int")
 
 
-_NUMBER = re.compile(r"[-+]?(\d[\d_]*\.?\d*|\.\d+)([eE][-+]?\d+)")
-
-
-def _as_number(value: Any) -> Any:
-    """YAML 1.1 reads ``3e-4`` as a string; a value written as a number is a float."""
-    if isinstance(value, str) and _NUMBER.fullmatch(value.strip()):
-        return float(value)
-    return value
-
-
 def parse_value(key: str, raw: str, flag: str) -> Any:
-    """One value as ``python -m train`` parses it (YAML), numbers written as numbers."""
-    from .settings import parse_assignment
+    """One value as every CLI of the project parses it (numbers as written, lists, ...)."""
+    from baselines.evaluation.specs import parse_assignment
 
-    return _as_number(parse_assignment(f"{key}={raw}", flag)[1])
+    return parse_assignment(f"{key}={raw}", flag)[1]
 
 
 def split_values(text: str) -> list[str]:
     """``a,b,[1,2]`` -> ``["a", "b", "[1,2]"]``: commas inside brackets or braces stay."""
-    parts, depth, cur = [], 0, []
-    for ch in text:
-        if ch in "[{(":
-            depth += 1
-        elif ch in "]})":
-            depth -= 1
-        if ch == "," and depth == 0:
-            parts.append("".join(cur).strip())
-            cur = []
-        else:
-            cur.append(ch)
-    parts.append("".join(cur).strip())
-    return parts
+    from baselines.evaluation.specs import split_top_level
+
+    return [part.strip() for part in split_top_level(text)]
 
 
 def _split_key(text: str, flag: str) -> tuple[str, str]:
@@ -152,7 +133,7 @@ def settings_for(
     from .settings import settings_from_sources
 
     data = copy.deepcopy(dict(base))
-    env_sets, hp_sets, frame_sets = [], [], []
+    env_sets, hp_sets, interface_sets = [], [], []
     for key, value in assignments:
         head, _, rest = key.partition(".")
         section = _SECTIONS.get(head) if rest else None
@@ -162,8 +143,8 @@ def settings_for(
             env_sets.append((rest, value))
         elif section == "hp":
             hp_sets.append((rest, value))
-        elif section == "frame":
-            frame_sets.append((rest, value))
+        elif section == "interface":
+            interface_sets.append((rest, value))
         elif section == "eval_env":
             data["eval_env"] = {**dict(data.get("eval_env") or {}), rest: value}
         else:
@@ -172,7 +153,7 @@ def settings_for(
                 f"{', '.join(sorted(_SECTIONS))} (or name a top-level settings field)"
             )
     return settings_from_sources(
-        data, flags, env_sets=env_sets, hp_sets=hp_sets, frame_sets=frame_sets
+        data, flags, env_sets=env_sets, hp_sets=hp_sets, interface_sets=interface_sets
     )
 
 

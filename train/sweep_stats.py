@@ -210,7 +210,7 @@ def curves_figure(results: Sequence[Mapping[str, Any]], path: Path, reps: int = 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from baselines.io import atomic_path
+    from baselines.evaluation.io import atomic_path
 
     shown = METRICS[:4]
     fig, axes = plt.subplots(2, 2, figsize=(11, 7.5), constrained_layout=True)

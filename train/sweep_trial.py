@@ -138,7 +138,7 @@ def _read_curve(run_dir: Path) -> list[dict[str, float]]:
 
 def collect(trial: Trial, run_dir: Path, settings) -> dict[str, Any]:
     """The result of a trained trial (see the module docstring)."""
-    from baselines.io import write_csv
+    from baselines.evaluation.io import write_csv
 
     record = _newest_record(run_dir) or {}
     best_path = run_dir / "best_model.json"
@@ -190,7 +190,7 @@ def run_trial(trial: Trial | dict[str, Any], sweep_dir: Path, interrupt: Any = N
     ``{"trial": name, "status": "interrupted ..."}`` and writes no result, so that the next
     start resumes it.
     """
-    from baselines.io import write_json
+    from baselines.evaluation.io import write_json
 
     from .run import pin_threads
     from .settings import settings_from_sources

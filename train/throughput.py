@@ -33,12 +33,12 @@ ROUTES = ("native", "supersuit")
 def make_route(route: str, num_swarms: int, overrides: dict[str, Any], seed: int):
     """The SB3 VecEnv of a route (raw world frame on both)."""
     if route == "native":
-        from pairflock_env.envs.sb3 import PairFlockVecEnv
+        from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
 
         from .settings import env_interface_kwargs
 
         world = env_interface_kwargs("world", {})
-        return PairFlockVecEnv(num_swarms=num_swarms, seed=seed, **world, **overrides)
+        return PairFlockSB3VecEnv(num_swarms=num_swarms, seed=seed, **world, **overrides)
     if route == "supersuit":
         try:
             import supersuit as ss

@@ -66,8 +66,9 @@ class SB3PairPolicy:
     The policy decides every ``interface.decision_period`` control steps, as in training: the
     returned state holds each row's last network output and its age, and passing it back
     (with ``episode_start`` True where an episode begins, as SB3 does for recurrent policies
-    and ``baselines.rollout`` does) makes the next calls reuse that output, decoded against
-    the fresh observation. Without a state (``state=None``) the network decides on every call.
+    and ``baselines.evaluation.rollout`` does) makes the next calls reuse that output, decoded
+    against the fresh observation. Without a state (``state=None``) the network decides on
+    every call.
     """
 
     def __init__(self, model: Any, env: Any, interface: dict[str, Any]) -> None:

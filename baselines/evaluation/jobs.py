@@ -1,8 +1,8 @@
 """Jobs of a benchmark sweep and the backends that run them (local processes or Ray).
 
 A job is one (scenario, policy) over a block of seeds, run as one batched core through
-:func:`baselines.rollout.rollout`. A swarm's result depends only on its config, policy and
-seed (each swarm has its own generator; nothing in a step mixes swarms), so it does not
+:func:`baselines.evaluation.rollout.rollout`. A swarm's result depends only on its config,
+policy and seed (each swarm has its own generator; nothing in a step mixes swarms), so it does not
 matter how seeds are grouped into jobs or where a job runs: the local and the Ray backend
 return identical numbers, and ``tests/test_benchmark.py`` checks both properties.
 """

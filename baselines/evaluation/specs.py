@@ -160,12 +160,12 @@ def parse_assignment(text: str, flag: str) -> tuple[str, Any]:
 
 
 def split_top_level(text: str, sep: str = ",") -> list[str]:
-    """Split at ``sep`` outside brackets: ``"a=[1,2],b=3"`` -> ``["a=[1,2]", "b=3"]``."""
+    """Split at ``sep`` outside brackets and braces: ``"a=[1,2],b=3"`` -> ``["a=[1,2]", "b=3"]``."""
     out, depth, cur = [], 0, []
     for ch in text:
-        if ch in "[(":
+        if ch in "[({":
             depth += 1
-        elif ch in "])":
+        elif ch in "])}":
             depth -= 1
         if ch == sep and depth == 0:
             out.append("".join(cur))
