@@ -12,15 +12,17 @@ controllers of the paper read them directly; learning views may rescale them on 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping
 
 import numpy as np
 
-__all__ = ["ObsField", "ObsLayout"]
+__all__ = ["ObsField", "ObsLayout", "build_observation"]
 
 
 @dataclasses.dataclass(frozen=True)
 class ObsField:
+    """One named field of the observation: its shape, unit and meaning."""
+
     name: str
     shape: tuple[int, ...]
     unit: str
@@ -132,3 +134,29 @@ class ObsLayout:
                 f"| {s.start}:{s.stop} | `{f.name}` | {f.shape} | {f.unit} | {f.description} |"
             )
         return "\n".join(rows)
+
+
+def build_observation(
+    layout: ObsLayout, batch: tuple[int, int], fields: Mapping[str, np.ndarray]
+) -> np.ndarray:
+    """The observation (B, M, layout.size) float32, filled field by field by name.
+
+    Args:
+        layout: the layout to fill.
+        batch: (B, M).
+        fields: an array per field of the layout, shaped (B, M, *field.shape) or broadcastable
+            to it with its own leading axes (e.g. (1, M, 1) for one value per agent); names
+            that the layout does not hold (fields of size 0) are ignored.
+
+    Raises:
+        KeyError: a field of the layout is missing from ``fields``.
+    """
+    B, M = batch
+    obs = np.empty((B, M, layout.size), np.float32)
+    for f in layout:
+        try:
+            v = fields[f.name]
+        except KeyError:
+            raise KeyError(f"no values for observation field {f.name!r}") from None
+        obs[..., layout.slice(f.name)] = v.reshape((*v.shape[:2], f.size))
+    return obs

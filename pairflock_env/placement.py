@@ -1,0 +1,104 @@
+"""Initial placement and pinning of one swarm: pure functions of the config, the swarm's
+generator and the paired UAVs.
+
+Placement (``config.init``):
+
+* ``"corners"``: the members of pair k start at -/+ the k-th corner diagonal scaled by
+  ``pair_corner`` (fixed, no random draw); ``"random"``: they are drawn like the others;
+* every other UAV is drawn uniformly in the start box: +-``pair_corner`` per axis for paired
+  UAVs, +-``swarm_half_width`` for unpaired ones, one ``rng.uniform(-1, 1, (n, dim))`` call;
+* with ``min_init_spacing`` > 0, every free UAV closer than that to a fixed UAV or to a UAV of
+  lower index is redrawn (all such UAVs in one call per round), for at most 1,000 rounds;
+* the whole swarm is then shifted by ``swarm_center``; velocities start at zero.
+
+Pinning (h_i of eq. 6, ``config.pinning``): ``"all"``, an int k (the k UAVs nearest the
+leader's initial position, ties by index) or a sequence of UAV indices.
+
+The random draws are made in exactly this order, so a seed gives the same swarm every time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .config import PairFlockConfig, corner_diagonals
+
+__all__ = ["MAX_PLACEMENT_ROUNDS", "initial_state", "pinning_mask"]
+
+#: rounds of redraws before placement under ``min_init_spacing`` gives up
+MAX_PLACEMENT_ROUNDS = 1000
+
+
+def initial_state(
+    cfg: PairFlockConfig, rng: np.random.Generator, agent_uavs: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Initial positions and velocities (N, dim) of one swarm.
+
+    Args:
+        cfg: the configuration (placement fields as in the module docstring).
+        rng: the swarm's generator; only it is drawn from.
+        agent_uavs: indices of the paired UAVs (M,).
+
+    Raises:
+        ValueError: the UAVs cannot be placed ``min_init_spacing`` apart in the start box.
+    """
+    N, D = cfg.n_uavs, cfg.dim
+    q = np.empty((N, D))
+    fixed = np.zeros(N, bool)
+    if cfg.init == "corners":
+        diags = corner_diagonals(D) * cfg.vector("pair_corner")
+        for k, (a, b) in enumerate(cfg.pairs):
+            q[a] = -diags[k]
+            q[b] = diags[k]
+            fixed[a] = fixed[b] = True
+    free = np.flatnonzero(~fixed)
+    paired = np.zeros(N, bool)
+    paired[agent_uavs] = True
+    half = np.where(paired[:, None], cfg.vector("pair_corner"), cfg.vector("swarm_half_width"))
+    q[free] = rng.uniform(-1.0, 1.0, (free.size, D)) * half[free]
+    if cfg.min_init_spacing > 0:
+        _spread_out(cfg, rng, q, fixed, half)
+    return q + cfg.vector("swarm_center"), np.zeros((N, D))
+
+
+def _spread_out(
+    cfg: PairFlockConfig,
+    rng: np.random.Generator,
+    q: np.ndarray,
+    fixed: np.ndarray,
+    half: np.ndarray,
+) -> None:
+    """Redraw free UAVs in place until no two are closer than ``min_init_spacing``."""
+    N, D = q.shape
+    spacing2 = cfg.min_init_spacing**2
+    # a free UAV is in conflict with any fixed UAV or any earlier UAV
+    earlier = np.tri(N, k=-1, dtype=bool) | fixed[None, :]
+    for _ in range(MAX_PLACEMENT_ROUNDS):
+        d2 = np.sum((q[:, None, :] - q[None, :, :]) ** 2, axis=-1)
+        np.fill_diagonal(d2, np.inf)
+        conflict = np.any((d2 < spacing2) & earlier, axis=1) & ~fixed
+        if not conflict.any():
+            return
+        idx = np.flatnonzero(conflict)
+        q[idx] = rng.uniform(-1.0, 1.0, (idx.size, D)) * half[idx]
+    raise ValueError(
+        f"min_init_spacing={cfg.min_init_spacing!r} is invalid: cannot place "
+        f"n_uavs={N} that far apart in the start box "
+        f"(swarm_half_width={cfg.swarm_half_width})"
+    )
+
+
+def pinning_mask(cfg: PairFlockConfig, q: np.ndarray, leader_q: np.ndarray) -> np.ndarray:
+    """h_i of eq. 6 as 0/1 floats (N,) for positions ``q`` (N, dim) and the leader at
+    ``leader_q`` (dim,)."""
+    pin = cfg.pinning
+    h = np.zeros(cfg.n_uavs)
+    if pin == "all":
+        h[:] = 1.0
+    elif isinstance(pin, int):
+        if pin > 0:
+            d = np.linalg.norm(q - leader_q, axis=1)
+            h[np.argsort(d, kind="stable")[:pin]] = 1.0
+    else:
+        h[list(pin)] = 1.0
+    return h
