@@ -35,7 +35,7 @@ from .delay import PartnerDelayBuffer
 from .dynamics import make_vehicle
 from .flocking import FlockingParams, flocking_pass, pair_pass
 from .leader import make_leader
-from .observations import ObsLayout, build_observation
+from .observations import ObsLayout, add_sensor_noise, build_observation
 from .pairing import agent_pair_state
 from .placement import initial_state, pinning_mask
 from .rewards import DIVERGENCE_PENALTY, episode_end, reward_terms, total_reward
@@ -59,8 +59,9 @@ __all__ = [
 SeedLike = int | np.random.SeedSequence | None
 
 _RESET_OPTIONS = ("positions", "velocities")
-#: largest float32: noisy observations saturate here instead of overflowing to inf
-_F32_MAX = float(np.finfo(np.float32).max)
+#: a diverging swarm overflows on its way out; the step checks its results itself (a swarm
+#: with non-finite values is flagged ``diverged``), so numpy's warnings would only be noise
+_CHECKED_FP = dict(over="ignore", invalid="ignore", divide="ignore")
 
 
 class PairFlockCore:
@@ -256,7 +257,8 @@ class PairFlockCore:
         self.vehicle.reset_rows(rows, self.q, self.p)
         self._is_reset[rows] = True
         zeros_u = np.zeros((B, self.n_agents, D))
-        res = self._refresh(zeros_u, np.zeros((B, self.n_agents), bool), reset_rows=rows)
+        with np.errstate(**_CHECKED_FP):
+            res = self._refresh(zeros_u, np.zeros((B, self.n_agents), bool), reset_rows=rows)
         res.reward[rows] = 0.0
         res.terminated[rows] = False
         res.truncated[rows] = False
@@ -329,11 +331,12 @@ class PairFlockCore:
         self._require_reset()
         a = self.check_actions(actions)  # 1. validate (raises before any state change)
         u, clipped = self.decode_actions(a)  # 2. decode: the pair command u, m/s^2
-        a_des = self._desired_acceleration(u)  # 3. flocking + pair term (+ disturbance)
-        self.vehicle.advance(self.q, self.p, a_des)  # 4. the vehicle model tracks a_des
-        self.steps += 1
-        np.multiply(self.steps, self.config.dt, out=self.t)  # no drift from repeated sums
-        return self._refresh(u, clipped)
+        with np.errstate(**_CHECKED_FP):
+            a_des = self._desired_acceleration(u)  # 3. flocking + pair term (+ disturbance)
+            self.vehicle.advance(self.q, self.p, a_des)  # 4. the vehicle model tracks a_des
+            self.steps += 1
+            np.multiply(self.steps, self.config.dt, out=self.t)  # no drift from repeated sums
+            return self._refresh(u, clipped)
 
     def _desired_acceleration(self, u: np.ndarray) -> np.ndarray:
         """a_des (B, N, dim): the flocking command of the current state, plus the pair
@@ -418,8 +421,8 @@ class PairFlockCore:
             off, vel, acc_partner = old[0] - qa, old[1] - pa, old[2]
         if cfg.obs_noise_position > 0 or cfg.obs_noise_velocity > 0:
             z = self._draw_normal((2, *off.shape[1:]))
-            off = _add_noise(off, cfg.obs_noise_position * z[:, 0])
-            vel = _add_noise(vel, cfg.obs_noise_velocity * z[:, 1])
+            off = add_sensor_noise(off, cfg.obs_noise_position * z[:, 0])
+            vel = add_sensor_noise(vel, cfg.obs_noise_velocity * z[:, 1])
         return off, vel, acc_partner
 
     def _observation(
@@ -453,12 +456,3 @@ class PairFlockCore:
         """The current observation (B, M, obs_size), float32 (a copy)."""
         self._require_reset()
         return self._obs.copy()
-
-
-def _add_noise(clean: np.ndarray, noise: np.ndarray) -> np.ndarray:
-    """``clean + noise``, saturated to the float32 range where ``clean`` is representable:
-    noise alone never makes an observation non-finite (nor flags a divergence)."""
-    noisy = clean + noise
-    if np.all(np.abs(noisy) <= _F32_MAX):
-        return noisy
-    return np.where(np.abs(clean) <= _F32_MAX, np.clip(noisy, -_F32_MAX, _F32_MAX), clean)

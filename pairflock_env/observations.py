@@ -16,7 +16,10 @@ from collections.abc import Iterator, Mapping
 
 import numpy as np
 
-__all__ = ["ObsField", "ObsLayout", "build_observation"]
+__all__ = ["ObsField", "ObsLayout", "add_sensor_noise", "build_observation"]
+
+#: largest float32: noisy observations saturate here instead of overflowing to inf
+_F32_MAX = float(np.finfo(np.float32).max)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -160,3 +163,17 @@ def build_observation(
             raise KeyError(f"no values for observation field {f.name!r}") from None
         obs[..., layout.slice(f.name)] = v.reshape((*v.shape[:2], f.size))
     return obs
+
+
+def add_sensor_noise(clean: np.ndarray, noise: np.ndarray) -> np.ndarray:
+    """``clean + noise`` (float64), saturated to the float32 range of the observation.
+
+    Sensor noise changes what an agent sees, never whether its swarm counts as diverged: where
+    the true value ``clean`` fits in float32, the noisy value is clipped to +-float32 max
+    instead of overflowing to inf; where it does not (a runaway or non-finite state), the
+    true value is kept, so the observation check flags the swarm as it would without noise.
+    """
+    noisy = clean + noise
+    if np.all(np.abs(noisy) <= _F32_MAX):
+        return noisy
+    return np.where(np.abs(clean) <= _F32_MAX, np.clip(noisy, -_F32_MAX, _F32_MAX), clean)
