@@ -327,6 +327,11 @@ class PairFlockCore:
         ``pair_accel_limit``; components outside [-1, 1] are clipped (reported as
         ``action_clipped``). NaN/inf raise ``ValueError`` and leave the state unchanged.
         Swarms whose episode has ended keep integrating; views reset them.
+
+        Decoding (stage 2) and the desired acceleration (stage 3) are separate on purpose:
+        a stage that adjusts the decoded pair command u from what each UAV senses (a
+        safety filter) belongs between them; the sweeps of the current state it needs are
+        the ones the previous step (or the reset) made.
         """
         self._require_reset()
         a = self.check_actions(actions)  # 1. validate (raises before any state change)
