@@ -12,6 +12,7 @@ controllers of the paper read them directly; learning views may rescale them on 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Iterator, Mapping
 
 import numpy as np
@@ -33,7 +34,60 @@ class ObsField:
 
     @property
     def size(self) -> int:
-        return int(np.prod(self.shape))
+        """Number of values of the field in the flat observation."""
+        return math.prod(self.shape)
+
+
+def _all_fields(D: int, K: int) -> list[ObsField]:
+    """Every field of the layout for dim D and K neighbour slots (some may have size 0)."""
+    return [
+        ObsField(
+            "partner_offset",
+            (D,),
+            "m",
+            "q_partner - q_self (y of eq. 21 for UAV A, -y for UAV B)",
+        ),
+        ObsField(
+            "partner_velocity",
+            (D,),
+            "m/s",
+            "p_partner - p_self (y' of eq. 22 for A, -y' for B)",
+        ),
+        ObsField("target_distance", (1,), "m", "d_m of this pair"),
+        ObsField(
+            "shared_neighbors",
+            (1,),
+            "count",
+            "N of eq. 28: neighbours shared by the pair, +2 if A and B are neighbours",
+        ),
+        ObsField("leader_offset", (D,), "m", "q_leader - q_self"),
+        ObsField("leader_velocity", (D,), "m/s", "p_leader - p_self"),
+        ObsField(
+            "flock_accel",
+            (D,),
+            "m/s^2",
+            "own flocking command f^g + f^v + h f^gamma this control period",
+        ),
+        ObsField(
+            "partner_flock_accel",
+            (D,),
+            "m/s^2",
+            "the partner's flocking command this control period",
+        ),
+        ObsField(
+            "neighbor_offsets",
+            (K, D),
+            "m",
+            "q_j - q_self of the K nearest non-partner UAVs, nearest first",
+        ),
+        ObsField("neighbor_velocities", (K, D), "m/s", "p_j - p_self of the same UAVs"),
+        ObsField(
+            "neighbor_mask",
+            (K,),
+            "0/1",
+            "1 where the neighbour slot holds a UAV (0 when N - 2 < K)",
+        ),
+    ]
 
 
 class ObsLayout:
@@ -42,55 +96,7 @@ class ObsLayout:
     def __init__(self, dim: int, n_neighbors: int) -> None:
         self.dim = dim
         self.n_neighbors = n_neighbors
-        D, K = dim, n_neighbors
-        fields = [
-            ObsField(
-                "partner_offset",
-                (D,),
-                "m",
-                "q_partner - q_self (y of eq. 21 for UAV A, -y for UAV B)",
-            ),
-            ObsField(
-                "partner_velocity",
-                (D,),
-                "m/s",
-                "p_partner - p_self (y' of eq. 22 for A, -y' for B)",
-            ),
-            ObsField("target_distance", (1,), "m", "d_m of this pair"),
-            ObsField(
-                "shared_neighbors",
-                (1,),
-                "count",
-                "N of eq. 28: neighbours shared by the pair, +2 if A and B are neighbours",
-            ),
-            ObsField("leader_offset", (D,), "m", "q_leader - q_self"),
-            ObsField("leader_velocity", (D,), "m/s", "p_leader - p_self"),
-            ObsField(
-                "flock_accel",
-                (D,),
-                "m/s^2",
-                "own flocking command f^g + f^v + h f^gamma this control period",
-            ),
-            ObsField(
-                "partner_flock_accel",
-                (D,),
-                "m/s^2",
-                "the partner's flocking command this control period",
-            ),
-            ObsField(
-                "neighbor_offsets",
-                (K, D),
-                "m",
-                "q_j - q_self of the K nearest non-partner UAVs, nearest first",
-            ),
-            ObsField("neighbor_velocities", (K, D), "m/s", "p_j - p_self of the same UAVs"),
-            ObsField(
-                "neighbor_mask",
-                (K,),
-                "0/1",
-                "1 where the neighbour slot holds a UAV (0 when N - 2 < K)",
-            ),
-        ]
+        fields = _all_fields(dim, n_neighbors)
         self.fields: tuple[ObsField, ...] = tuple(f for f in fields if f.size > 0)
         self._slices: dict[str, slice] = {}
         offset = 0
@@ -99,6 +105,8 @@ class ObsLayout:
             offset += f.size
         self.size = offset
         self._by_name = {f.name: f for f in self.fields}
+        # what build_observation needs per field, resolved once
+        self._plan = tuple((f.name, self._slices[f.name], f.size) for f in self.fields)
 
     def __iter__(self) -> Iterator[ObsField]:
         return iter(self.fields)
@@ -156,12 +164,12 @@ def build_observation(
     """
     B, M = batch
     obs = np.empty((B, M, layout.size), np.float32)
-    for f in layout:
+    for name, sl, size in layout._plan:
         try:
-            v = fields[f.name]
+            v = fields[name]
         except KeyError:
-            raise KeyError(f"no values for observation field {f.name!r}") from None
-        obs[..., layout.slice(f.name)] = v.reshape((*v.shape[:2], f.size))
+            raise KeyError(f"no values for observation field {name!r}") from None
+        obs[..., sl] = v if v.ndim == 3 else v.reshape((*v.shape[:2], size))
     return obs
 
 

@@ -17,6 +17,7 @@ than ``collision_distance`` to another UAV; it is *truncated* when it reached
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 import numpy as np
@@ -27,6 +28,7 @@ __all__ = [
     "DIVERGENCE_PENALTY",
     "REWARD_TERMS",
     "episode_end",
+    "may_overflow",
     "reward_terms",
     "total_reward",
 ]
@@ -78,3 +80,25 @@ def episode_end(
         terminated |= np.any(min_separation < cfg.collision_distance, axis=1)
     truncated = (steps >= cfg.episode_steps) & ~terminated
     return terminated, truncated
+
+
+def may_overflow(cfg: PairFlockConfig) -> bool:
+    """Whether a swarm inside ``divergence_limit`` could still get a non-finite reward or
+    sliding surface under ``cfg`` (only extreme configs can).
+
+    Every |position| and |velocity| component of a swarm not flagged diverged is at most
+    L = ``divergence_limit``, so |y| and |y'| are at most 2 L sqrt(dim); the bounds of the
+    reward terms and of s = c e + e' follow. When they are far from the float64 range the
+    core skips the per-step check of rewards and surfaces.
+    """
+    span = 2.0 * cfg.divergence_limit * math.sqrt(cfg.dim)
+    d_m = float(cfg.d_m_array.max())
+    surface = cfg.surface_slope * (span * span + d_m * d_m) + 2.0 * span * span
+    limit2 = cfg.pair_accel_limit * cfg.pair_accel_limit
+    reward = (
+        cfg.reward_error_weight * (span + d_m)
+        + cfg.reward_effort_weight * cfg.dim * max(limit2, 1.0 / limit2 if limit2 else math.inf)
+        + cfg.reward_separation_weight
+        + cfg.reward_collision_weight
+    )
+    return not (surface < 1e300 and reward < 1e300)
