@@ -145,6 +145,6 @@ def decode_pair_actions(actions: np.ndarray, accel_limit: float) -> tuple[np.nda
         (m/s^2); ``clipped`` (B, M) bool: some component of that agent's action was outside
         [-1, 1].
     """
-    clipped = np.any(np.abs(actions) > 1.0, axis=-1)
-    u = np.clip(actions, -1.0, 1.0) * accel_limit
+    clipped = (np.abs(actions) > 1.0).any(axis=-1)
+    u = actions.clip(-1.0, 1.0) * accel_limit
     return u, clipped
