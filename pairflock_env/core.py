@@ -23,7 +23,6 @@ name agents and apply their auto-reset rule.
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -37,7 +36,7 @@ from .flocking import FlockingParams, flocking_pass, pair_pass
 from .leader import make_leader
 from .observations import ObsLayout, add_sensor_noise, build_observation
 from .pairing import agent_pair_state
-from .placement import initial_state, pinning_mask
+from .placement import check_reset_options, initial_state, pinning_mask
 from .rewards import (
     DIVERGENCE_PENALTY,
     episode_end,
@@ -64,7 +63,6 @@ __all__ = [
 
 SeedLike = int | np.random.SeedSequence | None
 
-_RESET_OPTIONS = ("positions", "velocities")
 #: a diverging swarm overflows on its way out; the step checks its results itself (a swarm
 #: with non-finite values is flagged ``diverged``), so numpy's warnings would only be noise
 _CHECKED_FP = dict(over="ignore", invalid="ignore", divide="ignore")
@@ -131,6 +129,7 @@ class PairFlockCore:
         M = 2 * len(pairs)
         self._obs = np.zeros((B, M, self.layout.size), np.float32)
         self._info: dict[str, np.ndarray] | None = None  # the last step's infos
+        self._noise: tuple[np.ndarray, ...] | None = None  # this step's sensor noise
         partner_col = np.arange(M) ^ 1  # agent column of each agent's partner
         self._delay = (
             PartnerDelayBuffer(cfg.partner_delay, B, M, D, partner_col)
@@ -243,7 +242,7 @@ class PairFlockCore:
         if rows.size and (rows.min() < 0 or rows.max() >= B):
             raise ValueError(f"rows={rows.tolist()} is invalid: must be in [0, {B - 1}]")
         new_rngs = None if seed is None else self._make_rngs(seed, len(rows))
-        q0, p0 = self._check_reset_options(options, len(rows))
+        q0, p0 = check_reset_options(options, len(rows), cfg.n_uavs, D)
         # --- apply --------------------------------------------------------------------
         if new_rngs is not None:
             for r, g in zip(rows, new_rngs, strict=False):
@@ -270,43 +269,6 @@ class PairFlockCore:
         res.terminated[rows] = False
         res.truncated[rows] = False
         return res
-
-    def _check_reset_options(
-        self, options: Mapping[str, Any] | None, n_rows: int
-    ) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """Validated ``positions`` and ``velocities`` (n_rows, N, dim) of reset options."""
-        if options is None:
-            return None, None
-        if not isinstance(options, Mapping):
-            raise TypeError(f"options={options!r} is invalid: must be a dict or None")
-        unknown = [k for k in options if k not in _RESET_OPTIONS]
-        if unknown:
-            warnings.warn(
-                f"ignoring unknown reset options {unknown}; known: {list(_RESET_OPTIONS)}",
-                stacklevel=3,
-            )
-        q0 = self._check_state_option(options, "positions", n_rows)
-        p0 = self._check_state_option(options, "velocities", n_rows)
-        return q0, p0
-
-    def _check_state_option(self, options: Mapping[str, Any], key: str, n_rows: int):
-        if key not in options or options[key] is None:
-            return None
-        N, D = self.config.n_uavs, self.config.dim
-        try:
-            arr = np.asarray(options[key], dtype=np.float64)
-        except (TypeError, ValueError):
-            raise TypeError(f"options[{key!r}] must be a numeric array") from None
-        if arr.shape == (N, D):
-            arr = np.broadcast_to(arr, (n_rows, N, D))
-        if arr.shape != (n_rows, N, D):
-            raise ValueError(
-                f"options[{key!r}] has shape {arr.shape}, "
-                f"expected ({N}, {D}) or ({n_rows}, {N}, {D})"
-            )
-        if not np.all(np.isfinite(arr)):
-            raise ValueError(f"options[{key!r}] contains NaN or inf")
-        return arr
 
     # ------------------------------------------------------------------ step
     def check_actions(self, actions: Any) -> np.ndarray:
@@ -377,7 +339,10 @@ class PairFlockCore:
         lq, lp = self._leader.state(self.t)
         fl, pair = self._sweep(lq, lp)
         obs = self._observation(pair, lq, lp, reset_rows)
-        diverged = fl["diverged"] | ~np.isfinite(obs).all(axis=(1, 2))
+        finite = np.isfinite(obs).all(axis=(1, 2))
+        if self._noise is not None and not finite.all():
+            finite = self._saturate_noise(obs)
+        diverged = fl["diverged"] | ~finite
         terms = reward_terms(cfg, pair["pair_error"], u, pair["min_separation"])
         reward = total_reward(terms)
         if self._check_finite:  # an extreme config: what overflows still ends as a divergence
@@ -419,6 +384,7 @@ class PairFlockCore:
         """Partner offset, velocity and flocking command as the agents perceive them:
         ``partner_delay`` steps old and with sensor noise (when configured)."""
         cfg = self.config
+        self._noise = None
         acc = self._flock_out["acc"]
         qa, pa = pair["q"], pair["p"]
         off, vel = pair["offset"], pair["velocity"]
@@ -429,9 +395,24 @@ class PairFlockCore:
             off, vel, acc_partner = old[0] - qa, old[1] - pa, old[2]
         if cfg.obs_noise_position > 0 or cfg.obs_noise_velocity > 0:
             z = self._draw_normal((2, *off.shape[1:]))
-            off = add_sensor_noise(off, cfg.obs_noise_position * z[:, 0])
-            vel = add_sensor_noise(vel, cfg.obs_noise_velocity * z[:, 1])
+            self._noise = noise = (
+                off,
+                cfg.obs_noise_position * z[:, 0],
+                vel,
+                cfg.obs_noise_velocity * z[:, 1],
+            )
+            off, vel = off + noise[1], vel + noise[3]
         return off, vel, acc_partner
+
+    def _saturate_noise(self, obs: np.ndarray) -> np.ndarray:
+        """Where noise overflowed an observation: the noisy fields again, saturated by
+        :func:`~pairflock_env.observations.add_sensor_noise` (values that did not overflow
+        stay as they were); returns which swarms' observations are finite now."""
+        off, noise_off, vel, noise_vel = self._noise
+        sl = self.layout.slice
+        obs[..., sl("partner_offset")] = add_sensor_noise(off, noise_off)
+        obs[..., sl("partner_velocity")] = add_sensor_noise(vel, noise_vel)
+        return np.isfinite(obs).all(axis=(1, 2))
 
     def _observation(
         self,

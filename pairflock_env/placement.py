@@ -15,18 +15,33 @@ Pinning (h_i of eq. 6, ``config.pinning``): ``"all"``, an int k (the k UAVs near
 leader's initial position, ties by index) or a sequence of UAV indices.
 
 The random draws are made in exactly this order, so a seed gives the same swarm every time.
+
+Reset options (:func:`check_reset_options`) replace the drawn positions and/or velocities:
+arrays (N, dim) for every reset swarm, or (n_rows, N, dim), finite.
 """
 
 from __future__ import annotations
+
+import warnings
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
 from .config import PairFlockConfig, corner_diagonals
 
-__all__ = ["MAX_PLACEMENT_ROUNDS", "initial_state", "pinning_mask"]
+__all__ = [
+    "MAX_PLACEMENT_ROUNDS",
+    "RESET_OPTIONS",
+    "check_reset_options",
+    "initial_state",
+    "pinning_mask",
+]
 
 #: rounds of redraws before placement under ``min_init_spacing`` gives up
 MAX_PLACEMENT_ROUNDS = 1000
+#: the keys of reset options that set the initial state
+RESET_OPTIONS = ("positions", "velocities")
 
 
 def initial_state(
@@ -102,3 +117,47 @@ def pinning_mask(cfg: PairFlockConfig, q: np.ndarray, leader_q: np.ndarray) -> n
     else:
         h[list(pin)] = 1.0
     return h
+
+
+def check_reset_options(
+    options: Mapping[str, Any] | None, n_rows: int, n_uavs: int, dim: int
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Validated ``positions`` and ``velocities`` of reset options, each (n_rows, N, dim) or
+    ``None`` when not given.
+
+    Raises ``TypeError`` (options not a dict, values not numeric) or ``ValueError`` (a wrong
+    shape, NaN or inf); unknown keys are ignored with a warning.
+    """
+    if options is None:
+        return None, None
+    if not isinstance(options, Mapping):
+        raise TypeError(f"options={options!r} is invalid: must be a dict or None")
+    unknown = [k for k in options if k not in RESET_OPTIONS]
+    if unknown:
+        warnings.warn(
+            f"ignoring unknown reset options {unknown}; known: {list(RESET_OPTIONS)}",
+            stacklevel=3,
+        )
+    q0 = _state_option(options, "positions", n_rows, n_uavs, dim)
+    p0 = _state_option(options, "velocities", n_rows, n_uavs, dim)
+    return q0, p0
+
+
+def _state_option(
+    options: Mapping[str, Any], key: str, n_rows: int, N: int, D: int
+) -> np.ndarray | None:
+    if key not in options or options[key] is None:
+        return None
+    try:
+        arr = np.asarray(options[key], dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"options[{key!r}] must be a numeric array") from None
+    if arr.shape == (N, D):
+        arr = np.broadcast_to(arr, (n_rows, N, D))
+    if arr.shape != (n_rows, N, D):
+        raise ValueError(
+            f"options[{key!r}] has shape {arr.shape}, expected ({N}, {D}) or ({n_rows}, {N}, {D})"
+        )
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"options[{key!r}] contains NaN or inf")
+    return arr
