@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pairflock_env import PairFlockCore, make_config
+from pairflock_env import PairFlockCore, make_config, placement
 from pairflock_env.delay import PartnerDelayBuffer
 from pairflock_env.observations import ObsLayout, build_observation
 from pairflock_env.pairing import agent_pair_state, pair_error, sliding_surface
@@ -50,8 +50,11 @@ def test_random_placement_keeps_the_spacing_and_the_box():
     assert np.all(np.abs(q - cfg.vector("swarm_center")) <= half)
 
 
-def test_impossible_placement_names_the_spacing():
-    cfg = make_config("paper", n_uavs=40, swarm_half_width=2.0, min_init_spacing=3.0)
+def test_placement_that_gives_up_names_the_spacing(monkeypatch):
+    # the config rejects what it can tell is impossible; placement still gives up cleanly
+    # when its redraws run out
+    cfg = make_config("paper", n_uavs=40, init="random", min_init_spacing=3.0)
+    monkeypatch.setattr(placement, "MAX_PLACEMENT_ROUNDS", 0)
     with pytest.raises(ValueError, match="min_init_spacing"):
         initial_state(cfg, np.random.default_rng(0), np.asarray(cfg.pairs).reshape(-1))
 
