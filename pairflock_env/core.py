@@ -1,101 +1,72 @@
 """PairFlockCore: B swarms of N UAVs in one set of arrays, the engine behind every view.
 
-One control step, in order:
+One control step (:meth:`PairFlockCore.step`), stage by stage:
 
-1. validate the pair actions (B, M, dim) (M = 2 x pairs; before any state changes);
-2. decode: clip to [-1, 1], scale by ``pair_accel_limit`` to m/s^2 (the pair term f^x);
-3. a_des = flocking command of the current state (eqs. 11-19) + f^x on the paired UAVs;
+1. validate the pair actions (B, M, dim) (M = 2 x pairs; before any state changes):
+   :func:`~pairflock_env.actions.check_pair_actions`;
+2. decode: clip to [-1, 1], scale by ``pair_accel_limit`` to m/s^2, giving the pair command
+   u = f^x of every paired UAV (:meth:`PairFlockCore.decode_actions`);
+3. a_des = flocking command of the current state (eqs. 11-19) + u on the paired UAVs
+   (+ the random disturbance, when configured);
 4. the vehicle model integrates ``substeps`` physics steps with a_des held;
 5. the clock and the leader advance; one sweep computes the flocking command of the new
-   state together with separations, collisions and connectivity; observations, rewards,
-   termination (divergence, optional collision) and truncation (episode length) follow.
+   state together with separations, collisions and connectivity; observations
+   (:mod:`~pairflock_env.observations`, through the partner delay and sensor noise),
+   rewards and termination (:mod:`~pairflock_env.rewards`) and infos
+   (:mod:`~pairflock_env.step_result`) follow.
 
-The flocking command of step 3 was computed at the end of the previous step (or at reset),
-so each step does exactly one O(N^2) sweep. Views (PettingZoo, Gymnasium, SB3) only
-validate, reshape, name agents and apply their auto-reset rule.
+The flocking command of stage 3 was computed at the end of the previous step (or at reset),
+so each step does exactly one O(N^2) sweep. Initial states come from
+:mod:`~pairflock_env.placement`. Views (PettingZoo, Gymnasium, SB3) only validate, reshape,
+name agents and apply their auto-reset rule.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import warnings
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
-from .config import PairFlockConfig, corner_diagonals, make_config
+from .actions import check_pair_actions, decode_pair_actions, real_array
+from .config import PairFlockConfig, make_config
+from .delay import PartnerDelayBuffer
 from .dynamics import make_vehicle
 from .flocking import FlockingParams, flocking_pass, pair_pass
 from .leader import make_leader
-from .observations import ObsLayout
-from .pairing import sliding_surface
-from .rewards import DIVERGENCE_PENALTY, reward_terms
+from .observations import ObsLayout, add_sensor_noise, build_observation
+from .pairing import agent_pair_state
+from .placement import check_reset_options, initial_state, pinning_mask
+from .rewards import (
+    DIVERGENCE_PENALTY,
+    episode_end,
+    may_overflow,
+    reward_terms,
+    total_reward,
+)
 from .seeding import swarm_generators
+from .step_result import (
+    AGENT_INFO_KEYS,
+    SWARM_INFO_KEYS,
+    StepResult,
+    hold_last_finite,
+    make_info,
+)
 
-__all__ = ["AGENT_INFO_KEYS", "SWARM_INFO_KEYS", "PairFlockCore", "SeedLike", "StepResult"]
+__all__ = [
+    "AGENT_INFO_KEYS",
+    "SWARM_INFO_KEYS",
+    "PairFlockCore",
+    "SeedLike",
+    "StepResult",
+    "real_array",
+]
 
 SeedLike = int | np.random.SeedSequence | None
 
-#: per-agent info arrays, shape (B, M)
-AGENT_INFO_KEYS = (
-    "pair_distance",
-    "pair_error",
-    "sliding_surface",
-    "min_separation",
-    "shared_neighbors",
-    "pair_accel",
-    "action_clipped",
-)
-#: per-swarm info arrays, shape (B,)
-SWARM_INFO_KEYS = (
-    "sim_time",
-    "collisions",
-    "largest_component",
-    "velocity_mismatch",
-    "velocity_mismatch_max",
-    "diverged",
-)
-
-_RESET_OPTIONS = ("positions", "velocities")
-
-
-@dataclasses.dataclass
-class StepResult:
-    """What one core step (or reset) returns; every array has leading axis B."""
-
-    obs: np.ndarray
-    """(B, M, obs_size) float32, finite."""
-    reward: np.ndarray
-    """(B, M) float64."""
-    terminated: np.ndarray
-    """(B,) bool: divergence, or a collision when ``terminate_on_collision``."""
-    truncated: np.ndarray
-    """(B,) bool: the episode reached ``episode_steps``."""
-    info: dict[str, np.ndarray]
-    """Arrays named in AGENT_INFO_KEYS (B, M), SWARM_INFO_KEYS (B,) and reward terms (B, M)."""
-
-
-def real_array(x: Any, name: str, shape: tuple[int, ...] | None = None) -> np.ndarray:
-    """``x`` as a float64 array; ``TypeError`` naming ``name`` unless it is real (float, int or
-    uint), ``ValueError`` unless it has ``shape`` (when given) and is finite. The one check
-    behind every view's actions."""
-    if not (isinstance(x, np.ndarray) and x.dtype.kind in "fiu"):
-        try:
-            x = np.asarray(x)
-        except (TypeError, ValueError):
-            raise TypeError(f"{name} must be a numeric array, got {type(x).__name__}") from None
-        if x.dtype.kind not in "fiu":
-            raise TypeError(f"{name} has dtype {x.dtype}; expected a real (float or int) dtype")
-    if shape is not None:
-        if x.shape != shape:
-            raise ValueError(f"{name} has shape {x.shape}, expected {shape}")
-        if not np.isfinite(x).all():
-            bad = np.argwhere(~np.isfinite(x))[0].tolist()
-            raise ValueError(
-                f"{name} contains NaN or inf (first at index {bad}); it must be finite"
-            )
-    return x.astype(np.float64, copy=False)
+#: a diverging swarm overflows on its way out; the step checks its results itself (a swarm
+#: with non-finite values is flagged ``diverged``), so numpy's warnings would only be noise
+_CHECKED_FP = dict(over="ignore", invalid="ignore", divide="ignore")
 
 
 class PairFlockCore:
@@ -158,12 +129,16 @@ class PairFlockCore:
         self._pair_out: dict[str, np.ndarray] | None = None
         M = 2 * len(pairs)
         self._obs = np.zeros((B, M, self.layout.size), np.float32)
-        self._partner_col = np.arange(M) ^ 1  # agent column of each agent's partner
-        # ring buffer of the agents' (q, p, flocking command) for the partner delay
-        H = cfg.partner_delay + 1
-        self._hist = np.zeros((3, H, B, M, D)) if cfg.partner_delay else None
-        self._hist_pos = 0
+        self._info: dict[str, np.ndarray] | None = None  # the last step's infos
+        self._noise: tuple[np.ndarray, ...] | None = None  # this step's sensor noise
+        partner_col = np.arange(M) ^ 1  # agent column of each agent's partner
+        self._delay = (
+            PartnerDelayBuffer(cfg.partner_delay, B, M, D, partner_col)
+            if cfg.partner_delay
+            else None
+        )
         self._is_reset = np.zeros(B, bool)
+        self._check_finite = may_overflow(cfg)
         self._rngs: list[np.random.Generator] = [
             g if g is not None else np.random.default_rng() for g in self._make_rngs(seed, B)
         ]
@@ -171,14 +146,17 @@ class PairFlockCore:
     # ------------------------------------------------------------------ properties
     @property
     def n_agents(self) -> int:
+        """M: the number of paired UAVs (agents), two per pair."""
         return self.agent_uavs.shape[0]
 
     @property
     def obs_size(self) -> int:
+        """Length of one agent's observation vector (``layout.size``)."""
         return self.layout.size
 
     @property
     def action_size(self) -> int:
+        """Length of one agent's action vector (``dim``)."""
         return self.config.dim
 
     @property
@@ -230,25 +208,14 @@ class PairFlockCore:
 
         ``seed`` as in :meth:`reset`, with one entry per row when a sequence. Returns the
         full batch's current :class:`StepResult` (zero reward, no flags for reset rows).
+        Everything is validated before any state changes.
         """
         rows = np.asarray(rows, dtype=np.int64).reshape(-1)
-        B, D = self.num_envs, self.config.dim
+        B, D, cfg = self.num_envs, self.config.dim, self.config
         if rows.size and (rows.min() < 0 or rows.max() >= B):
             raise ValueError(f"rows={rows.tolist()} is invalid: must be in [0, {B - 1}]")
-        # --- validate everything before touching state -----------------------------
         new_rngs = None if seed is None else self._make_rngs(seed, len(rows))
-        q0 = p0 = None
-        if options is not None:
-            if not isinstance(options, Mapping):
-                raise TypeError(f"options={options!r} is invalid: must be a dict or None")
-            unknown = [k for k in options if k not in _RESET_OPTIONS]
-            if unknown:
-                warnings.warn(
-                    f"ignoring unknown reset options {unknown}; known: {list(_RESET_OPTIONS)}",
-                    stacklevel=2,
-                )
-            q0 = self._check_state_option(options, "positions", len(rows))
-            p0 = self._check_state_option(options, "velocities", len(rows))
+        q0, p0 = check_reset_options(options, len(rows), cfg.n_uavs, D)
         # --- apply --------------------------------------------------------------------
         if new_rngs is not None:
             for r, g in zip(rows, new_rngs, strict=False):
@@ -256,111 +223,44 @@ class PairFlockCore:
                     self._rngs[r] = g
         lq0, _ = self._leader.state(np.zeros(1))
         for k, r in enumerate(rows):
-            q, p = self._initial_state(self._rngs[r])
+            q, p = initial_state(cfg, self._rngs[r], self.agent_uavs)
             if q0 is not None:
                 q = q0[k]
             if p0 is not None:
                 p = p0[k]
             self.q[r] = q
             self.p[r] = p
-            self._pinned[r] = self._pinning_mask(q, lq0[0])
+            self._pinned[r] = pinning_mask(cfg, q, lq0[0])
         self.t[rows] = 0.0
         self.steps[rows] = 0
         self.vehicle.reset_rows(rows, self.q, self.p)
         self._is_reset[rows] = True
         zeros_u = np.zeros((B, self.n_agents, D))
-        res = self._refresh(zeros_u, np.zeros((B, self.n_agents), bool), reset_rows=rows)
+        with np.errstate(**_CHECKED_FP):
+            res = self._refresh(zeros_u, np.zeros((B, self.n_agents), bool), reset_rows=rows)
         res.reward[rows] = 0.0
         res.terminated[rows] = False
         res.truncated[rows] = False
         return res
 
-    def _check_state_option(self, options: Mapping[str, Any], key: str, n_rows: int):
-        if key not in options or options[key] is None:
-            return None
-        N, D = self.config.n_uavs, self.config.dim
-        try:
-            arr = np.asarray(options[key], dtype=np.float64)
-        except (TypeError, ValueError):
-            raise TypeError(f"options[{key!r}] must be a numeric array") from None
-        if arr.shape == (N, D):
-            arr = np.broadcast_to(arr, (n_rows, N, D))
-        if arr.shape != (n_rows, N, D):
-            raise ValueError(
-                f"options[{key!r}] has shape {arr.shape}, "
-                f"expected ({N}, {D}) or ({n_rows}, {N}, {D})"
-            )
-        if not np.all(np.isfinite(arr)):
-            raise ValueError(f"options[{key!r}] contains NaN or inf")
-        return arr
-
-    def _initial_state(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-        cfg = self.config
-        N, D = cfg.n_uavs, cfg.dim
-        q = np.empty((N, D))
-        fixed = np.zeros(N, bool)
-        if cfg.init == "corners":
-            diags = corner_diagonals(D) * cfg.vector("pair_corner")
-            for k, (a, b) in enumerate(cfg.pairs):
-                q[a] = -diags[k]
-                q[b] = diags[k]
-                fixed[a] = fixed[b] = True
-        free = np.flatnonzero(~fixed)
-        paired = np.zeros(N, bool)
-        paired[self.agent_uavs] = True
-        half = np.where(paired[:, None], cfg.vector("pair_corner"), cfg.vector("swarm_half_width"))
-        q[free] = rng.uniform(-1.0, 1.0, (free.size, D)) * half[free]
-        spacing2 = cfg.min_init_spacing**2
-        if spacing2 > 0:
-            for _ in range(1000):
-                d2 = np.sum((q[:, None, :] - q[None, :, :]) ** 2, axis=-1)
-                np.fill_diagonal(d2, np.inf)
-                # a free UAV is in conflict with any fixed UAV or any earlier UAV
-                earlier = np.tri(N, k=-1, dtype=bool) | fixed[None, :]
-                conflict = np.any((d2 < spacing2) & earlier, axis=1) & ~fixed
-                if not conflict.any():
-                    break
-                idx = np.flatnonzero(conflict)
-                q[idx] = rng.uniform(-1.0, 1.0, (idx.size, D)) * half[idx]
-            else:
-                raise ValueError(
-                    f"min_init_spacing={cfg.min_init_spacing!r} is invalid: cannot place "
-                    f"n_uavs={N} that far apart in the start box "
-                    f"(swarm_half_width={cfg.swarm_half_width})"
-                )
-        return q + cfg.vector("swarm_center"), np.zeros((N, D))
-
-    def _pinning_mask(self, q: np.ndarray, leader_q: np.ndarray) -> np.ndarray:
-        pin = self.config.pinning
-        N = self.config.n_uavs
-        h = np.zeros(N)
-        if pin == "all":
-            h[:] = 1.0
-        elif isinstance(pin, int):
-            if pin > 0:
-                d = np.linalg.norm(q - leader_q, axis=1)
-                h[np.argsort(d, kind="stable")[:pin]] = 1.0
-        else:
-            h[list(pin)] = 1.0
-        return h
-
     # ------------------------------------------------------------------ step
     def check_actions(self, actions: Any) -> np.ndarray:
-        """Validate pair actions: shape (B, M, dim) (or (M, dim) when B = 1), real, finite."""
-        B, M, D = self.num_envs, self.n_agents, self.config.dim
-        a = real_array(actions, "actions")
-        if a.shape != (B, M, D):
-            if B == 1 and a.shape == (M, D):
-                a = a[None]
-            else:
-                raise ValueError(f"actions have shape {a.shape}, expected ({B}, {M}, {D})")
-        if not np.isfinite(a).all():
-            bad = np.argwhere(~np.isfinite(a).all(axis=-1))[0]
-            raise ValueError(
-                f"actions contain NaN or inf (swarm {bad[0]}, agent {bad[1]}, UAV "
-                f"{self.agent_uavs[bad[1]]}); actions must be finite"
-            )
-        return a
+        """Validate pair actions: shape (B, M, dim) (or (M, dim) when B = 1), real, finite.
+
+        Returns them as float64 (B, M, dim); what is accepted is listed in
+        :mod:`pairflock_env.actions`.
+        """
+        return check_pair_actions(
+            actions, self.num_envs, self.n_agents, self.config.dim, self.agent_uavs
+        )
+
+    def decode_actions(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Stage 2 of a step: checked actions (B, M, dim) to the pair command.
+
+        Returns ``u`` (B, M, dim) in m/s^2 (clipped to [-1, 1], scaled by
+        ``pair_accel_limit``) and ``clipped`` (B, M) bool. Changes nothing.
+        """
+        return decode_pair_actions(actions, self.config.pair_accel_limit)
 
     def step(self, actions: Any) -> StepResult:
         """Advance every swarm by one control period under the given pair actions.
@@ -369,19 +269,30 @@ class PairFlockCore:
         ``pair_accel_limit``; components outside [-1, 1] are clipped (reported as
         ``action_clipped``). NaN/inf raise ``ValueError`` and leave the state unchanged.
         Swarms whose episode has ended keep integrating; views reset them.
+
+        Decoding (stage 2) and the desired acceleration (stage 3) are separate on purpose:
+        a stage that adjusts the decoded pair command u from what each UAV senses (a
+        safety filter) belongs between them; the sweeps of the current state it needs are
+        the ones the previous step (or the reset) made.
         """
         self._require_reset()
-        a = self.check_actions(actions)
-        clipped = np.any(np.abs(a) > 1.0, axis=-1)
-        u = np.clip(a, -1.0, 1.0) * self.config.pair_accel_limit
+        a = self.check_actions(actions)  # 1. validate (raises before any state change)
+        u, clipped = self.decode_actions(a)  # 2. decode: the pair command u, m/s^2
+        with np.errstate(**_CHECKED_FP):
+            a_des = self._desired_acceleration(u)  # 3. flocking + pair term (+ disturbance)
+            self.vehicle.advance(self.q, self.p, a_des)  # 4. the vehicle model tracks a_des
+            self.steps += 1
+            np.multiply(self.steps, self.config.dt, out=self.t)  # no drift from repeated sums
+            return self._refresh(u, clipped)
+
+    def _desired_acceleration(self, u: np.ndarray) -> np.ndarray:
+        """a_des (B, N, dim): the flocking command of the current state, plus the pair
+        command u on the paired UAVs, plus the random disturbance (when configured)."""
         a_des = self._flock_out["acc"].copy()
         a_des[:, self.agent_uavs] += u
         if self.config.disturbance_std > 0:
             a_des += self.config.disturbance_std * self._draw_normal(a_des.shape[1:])
-        self.vehicle.advance(self.q, self.p, a_des)
-        self.steps += 1
-        np.multiply(self.steps, self.config.dt, out=self.t)  # no drift from repeated sums
-        return self._refresh(u, clipped)
+        return a_des
 
     def _draw_normal(self, shape: tuple[int, ...]) -> np.ndarray:
         """Standard normal draws (B, *shape), swarm b from its own generator."""
@@ -396,104 +307,112 @@ class PairFlockCore:
     def _refresh(
         self, u: np.ndarray, clipped: np.ndarray, reset_rows: np.ndarray | None = None
     ) -> StepResult:
+        """Sweep the new state and build the step's observation, reward, flags and infos."""
         cfg = self.config
-        q, p = self.q, self.p
         lq, lp = self._leader.state(self.t)
+        fl, pair = self._sweep(lq, lp)
+        obs = self._observation(pair, lq, lp, reset_rows)
+        finite = np.isfinite(obs).all(axis=(1, 2))
+        if self._noise is not None and not finite.all():
+            finite = self._saturate_noise(obs)
+        diverged = fl["diverged"] | ~finite
+        terms = reward_terms(cfg, pair["pair_error"], u, pair["min_separation"])
+        reward = total_reward(terms)
+        if self._check_finite:  # an extreme config: what overflows still ends as a divergence
+            finite = np.isfinite(reward) & np.isfinite(pair["sliding_surface"])
+            diverged |= ~finite.all(axis=1)
+        info = make_info(pair, fl, u, clipped, self.t, diverged, terms)
+        if diverged.any():  # a diverged swarm keeps its last finite observation and infos
+            obs[diverged] = self._obs[diverged]
+            hold_last_finite(info, self._info, diverged)
+            reward[diverged] = -DIVERGENCE_PENALTY
+        self._obs, self._info = obs, info
+        vinfo = self.vehicle.info()
+        terminated, truncated = episode_end(
+            cfg, diverged, vinfo, pair["min_separation"], self.steps
+        )
+        info.update(vinfo)
+        return StepResult(obs, reward, terminated, truncated, info)
+
+    def _sweep(self, lq: np.ndarray, lp: np.ndarray) -> tuple[dict, dict[str, np.ndarray]]:
+        """The flocking sweep of the current state, and the agents' pair quantities (B, M):
+        partner offset and velocity, distance, error, sliding surface, separation and
+        shared neighbours (plus the neighbour slots of the observation)."""
+        cfg, q, p = self.config, self.q, self.p
+        ia, ip = self.agent_uavs, self.partner_uavs
         fl = self._flock_out = flocking_pass(
             self._params, q, p, lq, lp, self._pinned, self.partner_of, out=self._flock_out
         )
         pp = self._pair_out = pair_pass(
-            q,
-            p,
-            self.agent_uavs,
-            self.partner_uavs,
-            cfg.radius,
-            cfg.obs_neighbors,
-            out=self._pair_out,
+            q, p, ia, ip, cfg.radius, cfg.obs_neighbors, out=self._pair_out
         )
-        ia, ip = self.agent_uavs, self.partner_uavs
-        qa, pa = q[:, ia], p[:, ia]
-        off = q[:, ip] - qa
-        vel = p[:, ip] - pa
-        dist = np.sqrt(np.einsum("bmk,bmk->bm", off, off))
-        err = dist - self._agent_dm
-        surf = sliding_surface(off, vel, self._agent_dm, cfg.surface_slope)
-        min_sep = np.sqrt(fl["min_d2"][:, ia])
-        shared = pp["shared"][:, self.agent_pair]
-        diverged = fl["diverged"]
+        pair = agent_pair_state(q, p, ia, ip, self._agent_dm, cfg.surface_slope)
+        pair["min_separation"] = np.sqrt(fl["min_d2"][:, ia])
+        pair["shared_neighbors"] = pp["shared"][:, self.agent_pair]
+        return fl, pair
 
-        # what the agents perceive of their partner: delayed and/or noisy
-        acc = fl["acc"]
-        acc_partner = acc[:, ip]
-        off_obs, vel_obs = off, vel
-        if self._hist is not None:
-            H = self._hist.shape[1]
-            if reset_rows is None:
-                self._hist_pos = (self._hist_pos + 1) % H
-            now = np.stack([qa, pa, acc[:, ia]])  # (3, B, M, D)
-            self._hist[:, self._hist_pos] = now
-            if reset_rows is not None:  # a fresh episode has no older samples
-                self._hist[:, :, reset_rows] = now[:, None, reset_rows]
-            old = self._hist[:, (self._hist_pos + 1) % H][:, :, self._partner_col]
-            off_obs, vel_obs, acc_partner = old[0] - qa, old[1] - pa, old[2]
+    def _perceived_partner(
+        self, pair: Mapping[str, np.ndarray], reset_rows: np.ndarray | None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Partner offset, velocity and flocking command as the agents perceive them:
+        ``partner_delay`` steps old and with sensor noise (when configured)."""
+        cfg = self.config
+        self._noise = None
+        acc = self._flock_out["acc"]
+        qa, pa = pair["q"], pair["p"]
+        off, vel = pair["offset"], pair["velocity"]
+        acc_partner = acc[:, self.partner_uavs]
+        if self._delay is not None:
+            now = np.stack([qa, pa, acc[:, self.agent_uavs]])  # (3, B, M, D)
+            old = self._delay.push(now, reset_rows)
+            off, vel, acc_partner = old[0] - qa, old[1] - pa, old[2]
         if cfg.obs_noise_position > 0 or cfg.obs_noise_velocity > 0:
             z = self._draw_normal((2, *off.shape[1:]))
-            off_obs = off_obs + cfg.obs_noise_position * z[:, 0]
-            vel_obs = vel_obs + cfg.obs_noise_velocity * z[:, 1]
+            self._noise = noise = (
+                off,
+                cfg.obs_noise_position * z[:, 0],
+                vel,
+                cfg.obs_noise_velocity * z[:, 1],
+            )
+            off, vel = off + noise[1], vel + noise[3]
+        return off, vel, acc_partner
 
-        # observation, field by field (names from the layout)
-        B, M = qa.shape[:2]
-        obs = np.empty((B, M, self.layout.size), np.float32)
+    def _saturate_noise(self, obs: np.ndarray) -> np.ndarray:
+        """Where noise overflowed an observation: the noisy fields again, saturated by
+        :func:`~pairflock_env.observations.add_sensor_noise` (values that did not overflow
+        stay as they were); returns which swarms' observations are finite now."""
+        off, noise_off, vel, noise_vel = self._noise
         sl = self.layout.slice
-        obs[..., sl("partner_offset")] = off_obs
-        obs[..., sl("partner_velocity")] = vel_obs
-        obs[..., sl("target_distance")] = self._agent_dm[None, :, None]
-        obs[..., sl("shared_neighbors")] = shared[..., None]
-        obs[..., sl("leader_offset")] = lq[:, None, :] - qa
-        obs[..., sl("leader_velocity")] = lp[:, None, :] - pa
-        obs[..., sl("flock_accel")] = acc[:, ia]
-        obs[..., sl("partner_flock_accel")] = acc_partner
-        if cfg.obs_neighbors:
-            obs[..., sl("neighbor_offsets")] = pp["nbr_pos"].reshape(B, M, -1)
-            obs[..., sl("neighbor_velocities")] = pp["nbr_vel"].reshape(B, M, -1)
-            obs[..., sl("neighbor_mask")] = pp["nbr_mask"]
-        # a diverged swarm keeps its last finite observation
-        bad_obs = diverged | ~np.isfinite(obs).all(axis=(1, 2))
-        if bad_obs.any():
-            obs[bad_obs] = self._obs[bad_obs]
-            diverged = diverged | bad_obs
-        self._obs = obs
+        obs[..., sl("partner_offset")] = add_sensor_noise(off, noise_off)
+        obs[..., sl("partner_velocity")] = add_sensor_noise(vel, noise_vel)
+        return np.isfinite(obs).all(axis=(1, 2))
 
-        terms = reward_terms(cfg, err, u, min_sep)
-        reward = terms["error"] + terms["effort"] + terms["separation"] + terms["collision"]
-        reward[diverged] = -DIVERGENCE_PENALTY
-        vinfo = self.vehicle.info()
-        terminated = diverged.copy()
-        if "vehicle_terminated" in vinfo:  # e.g. a crashed quadrotor
-            terminated |= vinfo["vehicle_terminated"]
-        if cfg.terminate_on_collision:
-            terminated |= np.any(min_sep < cfg.collision_distance, axis=1)
-        truncated = (self.steps >= cfg.episode_steps) & ~terminated
-
-        info = {
-            "pair_distance": dist,
-            "pair_error": err,
-            "sliding_surface": surf,
-            "min_separation": min_sep,
-            "shared_neighbors": shared,
-            "pair_accel": np.sqrt(np.einsum("bmk,bmk->bm", u, u)),
-            "action_clipped": clipped,
-            "sim_time": self.t.copy(),
-            "collisions": fl["collisions"].copy(),
-            "largest_component": fl["largest_component"].copy(),
-            "velocity_mismatch": fl["velocity_mismatch"].copy(),
-            "velocity_mismatch_max": fl["velocity_mismatch_max"].copy(),
-            "diverged": diverged,
+    def _observation(
+        self,
+        pair: Mapping[str, np.ndarray],
+        lq: np.ndarray,
+        lp: np.ndarray,
+        reset_rows: np.ndarray | None,
+    ) -> np.ndarray:
+        """The observation (B, M, obs_size) float32 of the current state (layout by name)."""
+        off, vel, acc_partner = self._perceived_partner(pair, reset_rows)
+        qa, pa = pair["q"], pair["p"]
+        pp = self._pair_out
+        B, M = qa.shape[:2]
+        fields = {
+            "partner_offset": off,
+            "partner_velocity": vel,
+            "target_distance": self._agent_dm[None, :, None],
+            "shared_neighbors": pair["shared_neighbors"][..., None],
+            "leader_offset": lq[:, None, :] - qa,
+            "leader_velocity": lp[:, None, :] - pa,
+            "flock_accel": self._flock_out["acc"][:, self.agent_uavs],
+            "partner_flock_accel": acc_partner,
+            "neighbor_offsets": pp["nbr_pos"],
+            "neighbor_velocities": pp["nbr_vel"],
+            "neighbor_mask": pp["nbr_mask"],
         }
-        for k, v in terms.items():
-            info[f"reward_{k}"] = v
-        info.update(vinfo)
-        return StepResult(obs, reward, terminated, truncated, info)
+        return build_observation(self.layout, (B, M), fields)
 
     def observe(self) -> np.ndarray:
         """The current observation (B, M, obs_size), float32 (a copy)."""

@@ -12,15 +12,21 @@ controllers of the paper read them directly; learning views may rescale them on 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterator
+import math
+from collections.abc import Iterator, Mapping
 
 import numpy as np
 
-__all__ = ["ObsField", "ObsLayout"]
+__all__ = ["ObsField", "ObsLayout", "add_sensor_noise", "build_observation"]
+
+#: largest float32: noisy observations saturate here instead of overflowing to inf
+_F32_MAX = float(np.finfo(np.float32).max)
 
 
 @dataclasses.dataclass(frozen=True)
 class ObsField:
+    """One named field of the observation: its shape, unit and meaning."""
+
     name: str
     shape: tuple[int, ...]
     unit: str
@@ -28,7 +34,60 @@ class ObsField:
 
     @property
     def size(self) -> int:
-        return int(np.prod(self.shape))
+        """Number of values of the field in the flat observation."""
+        return math.prod(self.shape)
+
+
+def _all_fields(D: int, K: int) -> list[ObsField]:
+    """Every field of the layout for dim D and K neighbour slots (some may have size 0)."""
+    return [
+        ObsField(
+            "partner_offset",
+            (D,),
+            "m",
+            "q_partner - q_self (y of eq. 21 for UAV A, -y for UAV B)",
+        ),
+        ObsField(
+            "partner_velocity",
+            (D,),
+            "m/s",
+            "p_partner - p_self (y' of eq. 22 for A, -y' for B)",
+        ),
+        ObsField("target_distance", (1,), "m", "d_m of this pair"),
+        ObsField(
+            "shared_neighbors",
+            (1,),
+            "count",
+            "N of eq. 28: neighbours shared by the pair, +2 if A and B are neighbours",
+        ),
+        ObsField("leader_offset", (D,), "m", "q_leader - q_self"),
+        ObsField("leader_velocity", (D,), "m/s", "p_leader - p_self"),
+        ObsField(
+            "flock_accel",
+            (D,),
+            "m/s^2",
+            "own flocking command f^g + f^v + h f^gamma this control period",
+        ),
+        ObsField(
+            "partner_flock_accel",
+            (D,),
+            "m/s^2",
+            "the partner's flocking command this control period",
+        ),
+        ObsField(
+            "neighbor_offsets",
+            (K, D),
+            "m",
+            "q_j - q_self of the K nearest non-partner UAVs, nearest first",
+        ),
+        ObsField("neighbor_velocities", (K, D), "m/s", "p_j - p_self of the same UAVs"),
+        ObsField(
+            "neighbor_mask",
+            (K,),
+            "0/1",
+            "1 where the neighbour slot holds a UAV (0 when N - 2 < K)",
+        ),
+    ]
 
 
 class ObsLayout:
@@ -37,55 +96,7 @@ class ObsLayout:
     def __init__(self, dim: int, n_neighbors: int) -> None:
         self.dim = dim
         self.n_neighbors = n_neighbors
-        D, K = dim, n_neighbors
-        fields = [
-            ObsField(
-                "partner_offset",
-                (D,),
-                "m",
-                "q_partner - q_self (y of eq. 21 for UAV A, -y for UAV B)",
-            ),
-            ObsField(
-                "partner_velocity",
-                (D,),
-                "m/s",
-                "p_partner - p_self (y' of eq. 22 for A, -y' for B)",
-            ),
-            ObsField("target_distance", (1,), "m", "d_m of this pair"),
-            ObsField(
-                "shared_neighbors",
-                (1,),
-                "count",
-                "N of eq. 28: neighbours shared by the pair, +2 if A and B are neighbours",
-            ),
-            ObsField("leader_offset", (D,), "m", "q_leader - q_self"),
-            ObsField("leader_velocity", (D,), "m/s", "p_leader - p_self"),
-            ObsField(
-                "flock_accel",
-                (D,),
-                "m/s^2",
-                "own flocking command f^g + f^v + h f^gamma this control period",
-            ),
-            ObsField(
-                "partner_flock_accel",
-                (D,),
-                "m/s^2",
-                "the partner's flocking command this control period",
-            ),
-            ObsField(
-                "neighbor_offsets",
-                (K, D),
-                "m",
-                "q_j - q_self of the K nearest non-partner UAVs, nearest first",
-            ),
-            ObsField("neighbor_velocities", (K, D), "m/s", "p_j - p_self of the same UAVs"),
-            ObsField(
-                "neighbor_mask",
-                (K,),
-                "0/1",
-                "1 where the neighbour slot holds a UAV (0 when N - 2 < K)",
-            ),
-        ]
+        fields = _all_fields(dim, n_neighbors)
         self.fields: tuple[ObsField, ...] = tuple(f for f in fields if f.size > 0)
         self._slices: dict[str, slice] = {}
         offset = 0
@@ -94,6 +105,8 @@ class ObsLayout:
             offset += f.size
         self.size = offset
         self._by_name = {f.name: f for f in self.fields}
+        # what build_observation needs per field, resolved once
+        self._plan = tuple((f.name, self._slices[f.name], f.size) for f in self.fields)
 
     def __iter__(self) -> Iterator[ObsField]:
         return iter(self.fields)
@@ -132,3 +145,43 @@ class ObsLayout:
                 f"| {s.start}:{s.stop} | `{f.name}` | {f.shape} | {f.unit} | {f.description} |"
             )
         return "\n".join(rows)
+
+
+def build_observation(
+    layout: ObsLayout, batch: tuple[int, int], fields: Mapping[str, np.ndarray]
+) -> np.ndarray:
+    """The observation (B, M, layout.size) float32, filled field by field by name.
+
+    Args:
+        layout: the layout to fill.
+        batch: (B, M).
+        fields: an array per field of the layout, shaped (B, M, *field.shape) or broadcastable
+            to it with its own leading axes (e.g. (1, M, 1) for one value per agent); names
+            that the layout does not hold (fields of size 0) are ignored.
+
+    Raises:
+        KeyError: a field of the layout is missing from ``fields``.
+    """
+    B, M = batch
+    obs = np.empty((B, M, layout.size), np.float32)
+    for name, sl, size in layout._plan:
+        try:
+            v = fields[name]
+        except KeyError:
+            raise KeyError(f"no values for observation field {name!r}") from None
+        obs[..., sl] = v if v.ndim == 3 else v.reshape((*v.shape[:2], size))
+    return obs
+
+
+def add_sensor_noise(clean: np.ndarray, noise: np.ndarray) -> np.ndarray:
+    """``clean + noise`` (float64), saturated to the float32 range of the observation.
+
+    Sensor noise changes what an agent sees, never whether its swarm counts as diverged: where
+    the true value ``clean`` fits in float32, the noisy value is clipped to +-float32 max
+    instead of overflowing to inf; where it does not (a runaway or non-finite state), the
+    true value is kept, so the observation check flags the swarm as it would without noise.
+    """
+    noisy = clean + noise
+    if np.all(np.abs(noisy) <= _F32_MAX):
+        return noisy
+    return np.where(np.abs(clean) <= _F32_MAX, np.clip(noisy, -_F32_MAX, _F32_MAX), clean)

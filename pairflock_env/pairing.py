@@ -13,7 +13,13 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["pair_error", "sliding_surface", "square_error", "square_error_rate"]
+__all__ = [
+    "agent_pair_state",
+    "pair_error",
+    "sliding_surface",
+    "square_error",
+    "square_error_rate",
+]
 
 
 def _dot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -40,3 +46,37 @@ def sliding_surface(
 def pair_error(y: np.ndarray, d_m: np.ndarray | float) -> np.ndarray:
     """||y|| - d_m, in m (positive when the pair is too far apart)."""
     return np.sqrt(_dot(y, y)) - d_m
+
+
+def agent_pair_state(
+    q: np.ndarray,
+    p: np.ndarray,
+    agent_uavs: np.ndarray,
+    partner_uavs: np.ndarray,
+    d_m: np.ndarray,
+    c: float,
+) -> dict[str, np.ndarray]:
+    """Every agent's true pair quantities, from positions and velocities q, p (B, N, dim).
+
+    Args:
+        agent_uavs, partner_uavs: (M,) each agent's UAV and its partner's.
+        d_m: (M,) each agent's target distance (m); c: the surface slope of eq. 26 (1/s).
+
+    Returns:
+        dict of ``q``, ``p`` (the agents' own, (B, M, dim)), ``offset`` (y from the agent's
+        view, (B, M, dim), m), ``velocity`` (y', m/s), and (B, M): ``pair_distance`` ||y||
+        (m), ``pair_error`` ||y|| - d_m (m), ``sliding_surface`` s (m^2/s).
+    """
+    qa, pa = q[:, agent_uavs], p[:, agent_uavs]
+    off = q[:, partner_uavs] - qa
+    vel = p[:, partner_uavs] - pa
+    dist = np.sqrt(np.einsum("bmk,bmk->bm", off, off))
+    return {
+        "q": qa,
+        "p": pa,
+        "offset": off,
+        "velocity": vel,
+        "pair_distance": dist,
+        "pair_error": dist - d_m,
+        "sliding_surface": sliding_surface(off, vel, d_m, c),
+    }

@@ -1,4 +1,5 @@
-"""Per-agent reward: a sum of weighted penalties, each documented with its unit.
+"""Per-agent reward: a sum of weighted penalties, each documented with its unit; and the
+termination and truncation rules of an episode.
 
     r_i = - w_err * |e_i|                                   e_i = ||y|| - d_m  (m)
           - w_u   * (||u_i|| / pair_accel_limit)^2           applied pair acceleration
@@ -7,15 +8,30 @@
 
 Both members of a pair share the distance term; effort and separation are individual.
 A swarm whose state diverged gets ``-divergence_penalty`` instead (a finite number).
+
+An episode is *terminated* when its swarm diverged, when the vehicle model reports it ended
+(e.g. a crashed quadrotor) or, with ``terminate_on_collision``, when a paired UAV is closer
+than ``collision_distance`` to another UAV; it is *truncated* when it reached
+``episode_steps`` control steps without being terminated.
 """
 
 from __future__ import annotations
+
+import math
+from collections.abc import Mapping
 
 import numpy as np
 
 from .config import PairFlockConfig
 
-__all__ = ["DIVERGENCE_PENALTY", "REWARD_TERMS", "reward_terms"]
+__all__ = [
+    "DIVERGENCE_PENALTY",
+    "REWARD_TERMS",
+    "episode_end",
+    "may_overflow",
+    "reward_terms",
+    "total_reward",
+]
 
 REWARD_TERMS = ("error", "effort", "separation", "collision")
 DIVERGENCE_PENALTY = 100.0
@@ -37,3 +53,53 @@ def reward_terms(
         "separation": -cfg.reward_separation_weight * short,
         "collision": -cfg.reward_collision_weight * (min_separation < cfg.collision_distance),
     }
+
+
+def total_reward(terms: Mapping[str, np.ndarray]) -> np.ndarray:
+    """The reward (B, M): the sum of the terms, in the order of ``REWARD_TERMS``."""
+    return terms["error"] + terms["effort"] + terms["separation"] + terms["collision"]
+
+
+def episode_end(
+    cfg: PairFlockConfig,
+    diverged: np.ndarray,
+    vehicle_info: Mapping[str, np.ndarray],
+    min_separation: np.ndarray,
+    steps: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``terminated`` and ``truncated`` (B,) bool, by the rules of the module docstring.
+
+    Args:
+        diverged: (B,) bool; vehicle_info: the vehicle model's ``info()`` (its optional
+        ``vehicle_terminated`` (B,) ends episodes); min_separation: (B, M) m; steps: control
+        steps since reset (B,).
+    """
+    terminated = diverged.copy()
+    if "vehicle_terminated" in vehicle_info:  # e.g. a crashed quadrotor
+        terminated |= vehicle_info["vehicle_terminated"]
+    if cfg.terminate_on_collision:
+        terminated |= np.any(min_separation < cfg.collision_distance, axis=1)
+    truncated = (steps >= cfg.episode_steps) & ~terminated
+    return terminated, truncated
+
+
+def may_overflow(cfg: PairFlockConfig) -> bool:
+    """Whether a swarm inside ``divergence_limit`` could still get a non-finite reward or
+    sliding surface under ``cfg`` (only extreme configs can).
+
+    Every |position| and |velocity| component of a swarm not flagged diverged is at most
+    L = ``divergence_limit``, so |y| and |y'| are at most 2 L sqrt(dim); the bounds of the
+    reward terms and of s = c e + e' follow. When they are far from the float64 range the
+    core skips the per-step check of rewards and surfaces.
+    """
+    span = 2.0 * cfg.divergence_limit * math.sqrt(cfg.dim)
+    d_m = float(cfg.d_m_array.max())
+    surface = cfg.surface_slope * (span * span + d_m * d_m) + 2.0 * span * span
+    limit2 = cfg.pair_accel_limit * cfg.pair_accel_limit
+    reward = (
+        cfg.reward_error_weight * (span + d_m)
+        + cfg.reward_effort_weight * cfg.dim * max(limit2, 1.0 / limit2 if limit2 else math.inf)
+        + cfg.reward_separation_weight
+        + cfg.reward_collision_weight
+    )
+    return not (surface < 1e300 and reward < 1e300)

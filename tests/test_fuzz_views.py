@@ -48,7 +48,7 @@ ACTION_SHAPES["sb3"] = (4, DIM)
 #: masked arrays with masked entries: the core's action check (``real_array``) raises
 #: IndexError on them; the fix belongs to the core and is made on the core branch. Set to True
 #: once it is merged (test_masked_entries_are_a_clear_error then passes, too).
-MASKED_ENTRIES = False
+MASKED_ENTRIES = True
 
 _ENVS: dict[str, Any] = {}
 

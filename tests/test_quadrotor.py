@@ -439,3 +439,61 @@ def test_experiment_cli_writes_table_csv_and_figures(tmp_path):
     )
     with pytest.raises(SystemExit, match="quad_mass"):
         main(["--set", "quad_mass=-1", "--out", str(out / "bad"), "--quiet"])
+
+
+# --------------------------------------------------------------------------- kernel stages
+def test_kernel_stages_match_their_documented_formulas():
+    """The scalar stages the kernel is built from, one by one, against numpy."""
+    from pairflock_env.dynamics import quadrotor as Q
+
+    prm = QuadrotorModel(make_config("paper-quadrotor"), 1).params
+    # 1. acceleration limit, and a non-finite command
+    a, cut, ok = Q._limit_command(3.0, 4.0, 0.0, 2.5)
+    np.testing.assert_allclose(a, (1.5, 2.0, 0.0))
+    assert cut and ok
+    assert Q._limit_command(0.1, 0.0, 0.0, 2.5)[1:] == (False, True)
+    assert not Q._limit_command(np.nan, 0.0, 0.0, 2.5)[2]
+    # 3. desired attitude: orthonormal, b3 along F, heading psi
+    psi = math.radians(30.0)
+    F = np.array([1.0, -2.0, 9.0])
+    b1, b2, b3 = (np.array(c) for c in Q._desired_attitude(tuple(F), math.cos(psi), math.sin(psi)))
+    Rd = np.stack([b1, b2, b3], axis=1)
+    np.testing.assert_allclose(Rd.T @ Rd, np.eye(3), atol=1e-15)
+    np.testing.assert_allclose(b3, F / np.linalg.norm(F), rtol=1e-15)
+    assert euler_zyx(Rd)[2] == pytest.approx(psi, abs=1e-12)
+    # 4. at the desired attitude and at rest the moments vanish
+    M, gyro = Q._attitude_moments(
+        tuple(Rd.reshape(-1)),
+        (tuple(b1), tuple(b2), tuple(b3)),
+        (0.0, 0.0, 0.0),
+        tuple(prm.inertia),
+        tuple(prm.k_R),
+        tuple(prm.k_w),
+    )
+    np.testing.assert_allclose(M, 0.0, atol=1e-12)
+    assert gyro == (0.0, 0.0, 0.0)
+    # 6. motor lag: alpha = 1 reaches the commanded speed, alpha = 0 keeps the old one
+    T = (1.0, 2.0, 3.0, 4.0)
+    np.testing.assert_allclose(
+        Q._motor_lag((0.0,) * 4, T, 1.0, prm.k_f), np.sqrt(np.array(T) / prm.k_f), rtol=1e-15
+    )
+    assert Q._motor_lag((5.0,) * 4, T, 0.0, prm.k_f) == (5.0,) * 4
+    # rotor wrench = the documented mixer matrix times the rotor thrusts
+    o = (300.0, 310.0, 290.0, 305.0)
+    ft, tau = Q._rotor_wrench(o, prm.k_f, prm.d, prm.kappa)
+    np.testing.assert_allclose(
+        [ft, *tau], prm.mixer_matrix() @ (prm.k_f * np.square(o)), rtol=1e-12, atol=1e-12
+    )
+    # 7b. a rotation step stays on SO(3)
+    R, w = Q._rotate(
+        tuple(np.eye(3).reshape(-1)),
+        (0.1, -0.2, 0.3),
+        tau,
+        (0.0, 0.0, 0.0),
+        0.002,
+        tuple(prm.inertia),
+    )
+    R = np.array(R).reshape(3, 3)
+    np.testing.assert_allclose(R.T @ R, np.eye(3), atol=1e-15)
+    w0 = np.array([0.1, -0.2, 0.3])
+    np.testing.assert_allclose(w, w0 + 0.002 * np.asarray(tau) / prm.inertia, rtol=1e-14)

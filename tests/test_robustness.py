@@ -6,7 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pairflock_env import PairFlockCore
+from pairflock_env import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore, parallel_env
+from pairflock_env.observations import add_sensor_noise
+from pairflock_env.rewards import REWARD_TERMS
+from pairflock_env.step_result import LIVE_INFO_KEYS
 
 STEPS = 60
 
@@ -163,3 +166,111 @@ def test_random_options_use_each_swarms_own_generator(small_config):
 def test_bad_robustness_values_name_the_field(small_config, field, value, exc):
     with pytest.raises(exc, match=field):
         small_config.replace(**{field: value})
+
+
+# --------------------------------------------------------------------------- divergence
+#: the core's infos that describe the state (the vehicle model's own are always current)
+STATE_INFO_KEYS = [
+    k
+    for k in (*AGENT_INFO_KEYS, *SWARM_INFO_KEYS, *(f"reward_{t}" for t in REWARD_TERMS))
+    if k not in LIVE_INFO_KEYS
+]
+
+
+def _all_finite(info) -> bool:
+    return all(np.isfinite(np.asarray(v, dtype=np.float64)).all() for v in info.values())
+
+
+@pytest.mark.parametrize("blowup", [np.nan, 1e300])
+def test_a_diverged_swarm_keeps_its_last_finite_infos(small_config, blowup):
+    """A swarm that diverges (NaN, or a runaway beyond float32) repeats the observation and
+    the state infos of its last finite step; the other swarm is unaffected."""
+    core = PairFlockCore(small_config, num_envs=2)
+    ref = PairFlockCore(small_config, num_envs=2)
+    core.reset(seed=[0, 1])
+    ref.reset(seed=[0, 1])
+    zero = _zero(core)
+    last = core.step(zero)
+    ref.step(zero)
+    a = core.agent_uavs[0]
+    core.q[1, a] = blowup  # a numerical blow-up of a paired UAV in swarm 1
+    for k in range(3):
+        res, want = core.step(zero), ref.step(zero)
+        assert res.info["diverged"].tolist() == [False, True]
+        assert res.terminated.tolist() == [False, True]
+        assert _all_finite(res.info) and np.isfinite(res.obs).all()
+        assert np.isfinite(res.reward).all() and np.all(res.reward[1] < 0)
+        np.testing.assert_array_equal(res.obs[1], last.obs[1])
+        for key in res.info:
+            np.testing.assert_array_equal(res.info[key][0], want.info[key][0], err_msg=key)
+        for key in STATE_INFO_KEYS:
+            np.testing.assert_array_equal(res.info[key][1], last.info[key][1], err_msg=key)
+        assert res.info["sim_time"][1] == pytest.approx((k + 2) * small_config.dt)
+    # results already returned are not rewritten by later steps or resets
+    flags = res.info["diverged"].copy()
+    core.reset_rows([1], seed=[5])
+    assert res.info["diverged"].tolist() == flags.tolist()
+
+
+def test_a_diverged_swarm_has_finite_infos_in_the_pettingzoo_view(small_kwargs):
+    env = parallel_env(**small_kwargs)
+    env.reset(seed=0)
+    act = {a: np.zeros(env.config.dim, np.float32) for a in env.agents}
+    env.step(act)
+    env.core.q[0, env.core.agent_uavs[1]] = np.inf
+    _, rewards, terms, _, infos = env.step(act)
+    assert all(terms.values())
+    for info in infos.values():
+        assert info["diverged"]
+        for k, v in info.items():
+            if isinstance(v, (int, float, np.number)):
+                assert np.isfinite(v), k
+    assert all(np.isfinite(r) for r in rewards.values())
+
+
+def test_observation_noise_saturates_instead_of_overflowing():
+    big = np.finfo(np.float32).max
+    clean = np.array([0.0, 1.0, -2.0, 1e39, np.nan, np.inf])
+    noise = np.array([1e300, -1e300, 1.0, 1.0, 1.0, -1e300])
+    got = add_sensor_noise(clean, noise)
+    np.testing.assert_array_equal(got[:3], [big, -big, -1.0])
+    # a true value beyond what an observation can hold stays so: that is a divergence
+    assert got[3] == 1e39 and np.isnan(got[4]) and got[5] == np.inf
+    small = np.array([0.5, -0.25])
+    np.testing.assert_array_equal(add_sensor_noise(small, small), small + small)
+
+
+@pytest.mark.parametrize("field", ["obs_noise_position", "obs_noise_velocity"])
+def test_huge_observation_noise_never_flags_divergence(small_config, field):
+    """Either the config refuses a noise this large (a ValueError naming the field), or the
+    swarm flies on with finite observations, never flagged as diverged, on the physics of a
+    noise-free run."""
+    try:
+        cfg = small_config.replace(**{field: 1e300})
+    except ValueError as err:
+        assert field in str(err)
+        return
+    np.testing.assert_array_equal(_trajectory(cfg, 10), _trajectory(small_config, 10))
+    core = PairFlockCore(cfg, num_envs=2)
+    res = core.reset(seed=[1, 2])
+    for _ in range(10):
+        assert np.isfinite(res.obs).all() and not res.info["diverged"].any()
+        res = core.step(_zero(core))
+
+
+@pytest.mark.parametrize("overrides", [dict(surface_slope=1e308), dict(reward_error_weight=1e308)])
+def test_extreme_configs_give_finite_results_or_a_clear_error(small_config, overrides):
+    """What the state check cannot see (a surface or reward that overflows) still gives
+    finite rewards and infos, flagged as a divergence; or the config refuses the value."""
+    try:
+        cfg = small_config.replace(**overrides)
+    except ValueError as err:
+        assert next(iter(overrides)) in str(err)
+        return
+    core = PairFlockCore(cfg, num_envs=2)
+    res = core.reset(seed=[1, 2])
+    for _ in range(3):
+        assert np.isfinite(res.obs).all() and np.isfinite(res.reward).all()
+        assert _all_finite(res.info)
+        res = core.step(_zero(core))
+    assert res.info["diverged"].all()

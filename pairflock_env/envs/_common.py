@@ -12,8 +12,9 @@ from typing import Any
 
 import numpy as np
 
+from ..actions import real_array
 from ..config import PairFlockConfig
-from ..core import PairFlockCore, real_array
+from ..core import PairFlockCore
 from ..decision import DecisionHold
 from ..learning import INTERFACES, LearningInterface, make_interface
 

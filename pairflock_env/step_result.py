@@ -1,0 +1,113 @@
+"""What a core step returns: the :class:`StepResult` arrays, the names of the infos, and the
+two functions that assemble the infos and keep them finite for a diverged swarm.
+
+Infos are arrays with leading axis B: per agent (B, M) (``AGENT_INFO_KEYS`` and the reward
+terms ``reward_<term>``), per swarm (B,) (``SWARM_INFO_KEYS``), plus the vehicle model's own
+(see its ``info()``). All values are true (never delayed or noisy).
+
+A diverged swarm (``diverged``: its state ran beyond ``divergence_limit`` or turned
+non-finite) keeps its last finite observation, and its infos that describe the state (every
+key but ``LIVE_INFO_KEYS``) keep their last finite values too, so that every number a step
+returns is finite; ``diverged`` is True and the episode ends.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+
+import numpy as np
+
+__all__ = [
+    "AGENT_INFO_KEYS",
+    "LIVE_INFO_KEYS",
+    "SWARM_INFO_KEYS",
+    "StepResult",
+    "hold_last_finite",
+    "make_info",
+]
+
+#: per-agent info arrays, shape (B, M)
+AGENT_INFO_KEYS = (
+    "pair_distance",
+    "pair_error",
+    "sliding_surface",
+    "min_separation",
+    "shared_neighbors",
+    "pair_accel",
+    "action_clipped",
+)
+#: per-swarm info arrays, shape (B,)
+SWARM_INFO_KEYS = (
+    "sim_time",
+    "collisions",
+    "largest_component",
+    "velocity_mismatch",
+    "velocity_mismatch_max",
+    "diverged",
+)
+#: infos that describe the step itself (clock, applied command, flag), not the state: always
+#: current, also for a diverged swarm
+LIVE_INFO_KEYS = ("pair_accel", "action_clipped", "sim_time", "diverged")
+
+
+@dataclasses.dataclass
+class StepResult:
+    """What one core step (or reset) returns; every array has leading axis B.
+
+    The arrays are new at every step; the core keeps reading the latest ``obs`` and ``info``
+    (a diverged swarm repeats its last finite values), so copy them before changing them.
+    """
+
+    obs: np.ndarray
+    """(B, M, obs_size) float32, finite."""
+    reward: np.ndarray
+    """(B, M) float64."""
+    terminated: np.ndarray
+    """(B,) bool: divergence, or a collision when ``terminate_on_collision``."""
+    truncated: np.ndarray
+    """(B,) bool: the episode reached ``episode_steps``."""
+    info: dict[str, np.ndarray]
+    """Arrays named in AGENT_INFO_KEYS (B, M), SWARM_INFO_KEYS (B,) and reward terms (B, M)."""
+
+
+def make_info(
+    pair: Mapping[str, np.ndarray],
+    flock: Mapping[str, np.ndarray],
+    u: np.ndarray,
+    clipped: np.ndarray,
+    sim_time: np.ndarray,
+    diverged: np.ndarray,
+    terms: Mapping[str, np.ndarray],
+) -> dict[str, np.ndarray]:
+    """The core's infos of one step (fresh arrays; see the module docstring).
+
+    Args:
+        pair: the agents' pair quantities ``pair_distance``, ``pair_error``,
+            ``sliding_surface``, ``min_separation``, ``shared_neighbors`` (B, M).
+        flock: the flocking sweep's outputs (``collisions``, ``largest_component``,
+            ``velocity_mismatch``, ``velocity_mismatch_max``, (B,)); copied.
+        u: the applied pair command (B, M, dim), m/s^2; clipped: (B, M) bool.
+        sim_time: (B,) s (copied); diverged: (B,) bool; terms: reward terms (B, M).
+    """
+    info = {k: pair[k] for k in AGENT_INFO_KEYS[:5]}
+    info["pair_accel"] = np.sqrt(np.einsum("bmk,bmk->bm", u, u))
+    info["action_clipped"] = clipped
+    info["sim_time"] = sim_time.copy()
+    for k in SWARM_INFO_KEYS[1:5]:
+        info[k] = flock[k].copy()
+    info["diverged"] = diverged
+    for k, v in terms.items():
+        info[f"reward_{k}"] = v
+    return info
+
+
+def hold_last_finite(
+    info: dict[str, np.ndarray], last: Mapping[str, np.ndarray] | None, rows: np.ndarray
+) -> None:
+    """In place: swarms ``rows`` (bool mask (B,)) keep every info of ``info`` but
+    ``LIVE_INFO_KEYS`` at its value in ``last``, the infos of the previous step (zeros when
+    there is none)."""
+    for k, v in info.items():
+        if k not in LIVE_INFO_KEYS:
+            v[rows] = 0 if last is None else last[k][rows]
