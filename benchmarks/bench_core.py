@@ -1,11 +1,14 @@
-"""Speed of the particle core and of the PettingZoo API.
+"""Speed of the particle core, of the neighbour kernels and of the PettingZoo API.
 
-    python benchmarks/bench_core.py            # full grid, prints a markdown table
+    python benchmarks/bench_core.py            # everything, prints markdown tables
     python benchmarks/bench_core.py --quick    # fewer repeats
+    python benchmarks/bench_core.py --sections kernels   # only the neighbour kernels
 
 Reports UAV-steps/s (simulated UAVs x control steps per wall second) of
 ``PairFlockCore.step`` for N in {20, 50, 100} x B in {1, 64, 256} (medians over repeats),
-env steps/s of the PettingZoo ``step()`` at B = 1, and where the time of one core step goes.
+env steps/s of the PettingZoo ``step()`` at B = 1, where the time of one core step goes, and
+the neighbour kernels alone (flocking and pair sweeps, plus the grid build on the grid path)
+with all pairs and with the grid, for N up to 10,000.
 Everything runs on one thread (numba kernels are single-threaded; OMP/MKL pinned to 1).
 """
 
@@ -23,7 +26,11 @@ import numpy as np
 from _timing import median_rate, print_breakdown
 
 from pairflock_env import PairFlockCore, make_config, parallel_env
-from pairflock_env.flocking import flocking_pass, pair_pass
+from pairflock_env.flocking import FlockingParams, flocking_pass, pair_pass
+from pairflock_env.grid_placement import place
+from pairflock_env.neighbors import NeighborGrid
+
+SECTIONS = ("core", "pettingzoo", "breakdown", "kernels")
 
 
 def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
@@ -95,6 +102,67 @@ def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
     return parts
 
 
+def kernel_state(kind: str, N: int, B: int, seed: int = 0):
+    """Positions and velocities (B, N, 2) of the paper's swarm scaled to N UAVs.
+
+    ``"start"``: the paper's start density (50 UAVs in a 100 m square) kept for every N, the
+    box growing as sqrt(N), placed with the 2 m minimum spacing: sparse, most UAVs with 0-2
+    neighbours. ``"flock"``: a hexagonal lattice at the spacing d = 7 m jittered by 0.3 m, the
+    alpha-lattice the protocol converges to (about 6 neighbours each).
+    """
+    rng = np.random.default_rng(seed)
+    qs = []
+    for _ in range(B):
+        if kind == "start":
+            half = np.full((N, 1), 50.0 * np.sqrt(N / 50))
+            q = place(rng, half, np.zeros((N, 2)), np.zeros(N, bool), 2.0, np.zeros(2))
+        else:
+            n = int(np.ceil(np.sqrt(N)))
+            i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+            lattice = np.stack([i + 0.5 * (j % 2), j * np.sqrt(3) / 2], -1).reshape(-1, 2)
+            q = 7.0 * lattice[:N] + rng.normal(0.0, 0.3, (N, 2))
+        qs.append(q)
+    return np.ascontiguousarray(qs), rng.normal(0.0, 1.0, (B, N, 2))
+
+
+def bench_kernels(kind: str, N: int, B: int, grid: bool, repeats: int, min_time: float) -> float:
+    """UAV-steps/s of the neighbour kernels of one step (all pairs, or grid build + sweeps)."""
+    cfg = make_config("paper", n_uavs=N)
+    prm = FlockingParams(cfg)
+    q, p = kernel_state(kind, N, B)
+    lq, lp, pinned = np.zeros((B, 2)), np.zeros((B, 2)), np.ones((B, N))
+    agents, partners = np.array([0, 1]), np.array([1, 0])
+    partner = np.full(N, -1, np.int64)
+    partner[agents] = partners
+    g = NeighborGrid(B, N, 2, max(cfg.radius, cfg.collision_distance)) if grid else None
+    fl = pp = None
+
+    def step():
+        nonlocal fl, pp
+        if g is not None:
+            g.build(q)
+        fl = flocking_pass(prm, q, p, lq, lp, pinned, partner, out=fl, grid=g)
+        pp = pair_pass(q, p, agents, partners, cfg.radius, cfg.obs_neighbors, out=pp, grid=g)
+
+    return median_rate(step, B * N, repeats, min_time)
+
+
+def kernel_tables(repeats: int, min_time: float) -> None:
+    sizes = [(100, 1), (300, 1), (1000, 1), (3000, 1), (10000, 1), (1000, 16)]
+    for kind in ("start", "flock"):
+        print(
+            f"\n## Neighbour kernels alone, {kind} state: UAV-steps/s (median)\n\n"
+            "| N | B | all pairs | grid | grid / all pairs |\n|---|---|---|---|---|"
+        )
+        rates = {}
+        for N, B in sizes:
+            a = bench_kernels(kind, N, B, False, repeats, min_time)
+            g = rates[N, B] = bench_kernels(kind, N, B, True, repeats, min_time)
+            print(f"| {N:,} | {B} | {a:,.0f} | {g:,.0f} | {g / a:.1f}x |")
+        ratio = rates[300, 1] / rates[10000, 1]
+        print(f"\nGrid: per-UAV cost at N = 10,000 / at N = 300 (B = 1): {ratio:.2f}")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(
         prog="python benchmarks/bench_core.py",
@@ -105,6 +173,9 @@ def main(argv=None) -> int:
     )
     ap.add_argument("--n-uavs", type=int, nargs="+", default=[20, 50, 100])
     ap.add_argument("--batch", type=int, nargs="+", default=[1, 64, 256])
+    ap.add_argument(
+        "--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS), help="what to run"
+    )
     args = ap.parse_args(argv)
     repeats, min_time = (3, 0.2) if args.quick else (7, 0.5)
 
@@ -112,19 +183,24 @@ def main(argv=None) -> int:
         f"# pairflock_env core speed ({platform.processor() or platform.machine()}, "
         f"{os.cpu_count()} cores visible, 1 thread used)\n"
     )
-    print("## Core `PairFlockCore.step`: UAV-steps/s (median)\n")
-    print("| N \\ B | " + " | ".join(str(b) for b in args.batch) + " |")
-    print("|---|" + "---|" * len(args.batch))
-    for N in args.n_uavs:
-        cells = [f"{bench_core(N, B, repeats, min_time):,.0f}" for B in args.batch]
-        print(f"| {N} | " + " | ".join(cells) + " |")
-    print("\n## PettingZoo `parallel_env.step()` at B = 1: env steps/s (median)\n")
-    print("| N | steps/s | UAV-steps/s |\n|---|---|---|")
-    for N in args.n_uavs:
-        r = bench_pettingzoo(N, repeats, min_time)
-        print(f"| {N} | {r:,.0f} | {r * N:,.0f} |")
-    for N, B in ((100, 256), (100, 1)):
-        print_breakdown(f"Where the time goes: N = {N}, B = {B}", breakdown(N, B, repeats))
+    if "core" in args.sections:
+        print("## Core `PairFlockCore.step`: UAV-steps/s (median)\n")
+        print("| N \\ B | " + " | ".join(str(b) for b in args.batch) + " |")
+        print("|---|" + "---|" * len(args.batch))
+        for N in args.n_uavs:
+            cells = [f"{bench_core(N, B, repeats, min_time):,.0f}" for B in args.batch]
+            print(f"| {N} | " + " | ".join(cells) + " |")
+    if "pettingzoo" in args.sections:
+        print("\n## PettingZoo `parallel_env.step()` at B = 1: env steps/s (median)\n")
+        print("| N | steps/s | UAV-steps/s |\n|---|---|---|")
+        for N in args.n_uavs:
+            r = bench_pettingzoo(N, repeats, min_time)
+            print(f"| {N} | {r:,.0f} | {r * N:,.0f} |")
+    if "breakdown" in args.sections:
+        for N, B in ((100, 256), (100, 1)):
+            print_breakdown(f"Where the time goes: N = {N}, B = {B}", breakdown(N, B, repeats))
+    if "kernels" in args.sections:
+        kernel_tables(repeats, min_time)
     return 0
 
 

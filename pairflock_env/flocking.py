@@ -36,15 +36,15 @@ from .config import PairFlockConfig
 from .neighbors import (
     GridArrays,
     NeighborGrid,
-    block_buckets,
+    check_grid,
     dist2,
     jit_inline,
     jit_kernel,
-    k_nearest_all_pairs,
-    k_nearest_grid,
     nearest_d2,
+    one_ring,
     ring_bound2,
 )
+from .pair_neighbors import pair_pass  # re-exported: the pair sweep lived here before
 
 __all__ = ["FlockScalars", "FlockingParams", "flocking_pass", "pair_pass"]
 
@@ -133,7 +133,7 @@ def _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size):
     is_bad = False
     for i in range(N):
         parent[i] = i
-        size[i] = 0
+        size[i] = 1
         min_d2[b, i] = np.inf
         for k in range(D):
             x = q[b, i, k]
@@ -156,23 +156,23 @@ def _find(parent, x):
 
 
 @jit_inline
-def _union(parent, i, j):
+def _union(parent, size, i, j):
+    """Join the components of i and j, the smaller under the larger (shallow trees)."""
     x = _find(parent, i)
     y = _find(parent, j)
     if x != y:
+        if size[x] > size[y]:
+            x, y = y, x
         parent[x] = y
+        size[y] += size[x]
 
 
 @jit_kernel
 def _largest_component(parent, size):
     best = 0
     for i in range(parent.shape[0]):
-        x = i
-        while parent[x] != x:
-            x = parent[x]
-        size[x] += 1
-        if size[x] > best:
-            best = size[x]
+        if parent[i] == i and size[i] > best:
+            best = size[i]
     return best
 
 
@@ -197,7 +197,7 @@ def _separation(min_d2, b, i, j, partner_i, d2):
 
 
 @jit_kernel
-def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, parent):
+def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size):
     """Every pair i < j of swarm b; returns the number of collisions."""
     N = q.shape[1]
     nc = 0
@@ -210,7 +210,7 @@ def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, parent):
                 nc += 1
             if d2 < prm.r2:
                 _pair_force(q, p, prm, b, i, j, d2, acc)
-                _union(parent, i, j)
+                _union(parent, size, i, j)
     return nc
 
 
@@ -229,13 +229,13 @@ def _sort_by_index(nb_j, nb_d2, n):
 
 
 @jit_kernel
-def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, parent, nb_j, nb_d2):
+def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, uf, nb_j, nb_d2):
     """:func:`_sweep_all_pairs` over the grid's one-ring pairs, same order and results."""
     N = q.shape[1]
     nc = 0
     for i in range(N):
         pi = partner[i]
-        n_bk, _ = block_buckets(g, b, g.cell[b, i], 1, g.buckets)
+        n_bk = one_ring(q, b, i, g, g.buckets)
         n = 0
         for t in range(n_bk):
             bk = g.buckets[t]
@@ -250,7 +250,7 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, parent, nb_j, nb_d2):
                 if d2 < prm.coll2:
                     nc += 1
                 if d2 < prm.r2:
-                    _union(parent, i, j)
+                    _union(uf[0], uf[1], i, j)
                     nb_j[n] = j
                     nb_d2[n] = d2
                     n += 1
@@ -261,7 +261,7 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, parent, nb_j, nb_d2):
     bound = ring_bound2(g, 1)
     for i in range(N):
         if not min_d2[b, i] < bound:
-            min_d2[b, i] = nearest_d2(q, b, i, partner[i], g, 2)
+            min_d2[b, i] = nearest_d2(q, b, i, partner[i], g, min_d2[b, i], 1)
     return nc
 
 
@@ -275,9 +275,11 @@ def _flock_swarms(q, p, ql, pl, h, partner, prm, out, work, g):
         _velocity_mismatch(p, pl, partner, n_unpaired, b, vmis, vmax)
         bad[b] = _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size)
         if g is not None and g.ok[b]:
-            n_coll[b] = _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, parent, nb_j, nb_d2)
+            n_coll[b] = _sweep_grid(
+                q, p, partner, prm, b, g, acc, min_d2, (parent, size), nb_j, nb_d2
+            )
         else:
-            n_coll[b] = _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, parent)
+            n_coll[b] = _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size)
         lcc[b] = _largest_component(parent, size)
 
 
@@ -318,20 +320,6 @@ def _flocking_grid_kernel(
     _flock_swarms(q, p, ql, pl, h, partner, _scalars(prm), out, work, GridArrays(*grid))
 
 
-def _check_grid(grid, shape, need2: float, what: str) -> None:
-    if grid is None:
-        return
-    if not isinstance(grid, NeighborGrid):
-        raise TypeError(f"grid must be a NeighborGrid or None, got {type(grid).__name__}")
-    if grid.shape != shape:
-        raise ValueError(f"grid is for arrays of shape {grid.shape}, got {shape}")
-    if grid.cell_size**2 < need2:
-        raise ValueError(
-            f"grid cell_size={grid.cell_size} is too small: it must be at least {what} "
-            f"({np.sqrt(need2):g})"
-        )
-
-
 def flocking_pass(
     params: FlockingParams,
     q: np.ndarray,
@@ -363,7 +351,7 @@ def flocking_pass(
         paired). Per-swarm sums run sequentially, so results do not depend on B.
     """
     B, N, D = q.shape
-    _check_grid(grid, q.shape, max(params.r2, params.coll2), "max(radius, collision_distance)")
+    check_grid(grid, q.shape, max(params.r2, params.coll2), "max(radius, collision_distance)")
     if out is None or out["acc"].shape != q.shape:
         out = {
             "acc": np.empty((B, N, D)),
@@ -402,140 +390,4 @@ def flocking_pass(
         _flocking_kernel(*args)
     else:
         _flocking_grid_kernel(*args, *grid.arrays)
-    return out
-
-
-# ---------------------------------------------------------------------------------------
-# the pair sweep: shared neighbours (eq. 28) and the K nearest for observations
-# ---------------------------------------------------------------------------------------
-@jit_inline
-def _is_shared(q, b, ia, ib, j, r2):
-    """1 if UAV j (neither ia nor ib) is a neighbour of both ia and ib, else 0."""
-    if j in (ia, ib):
-        return 0
-    return 1 if dist2(q, b, ia, j) < r2 and dist2(q, b, ib, j) < r2 else 0
-
-
-@jit_kernel
-def _shared_count(q, b, ia, ib, r2, g):
-    """|N_A & N_B| of eq. 28 (Assumption 4), plus 2 when A and B are neighbours: the mutual
-    link contributes -2a y - 2b y' to y''."""
-    cnt = 0
-    if g is not None and g.ok[b]:
-        n_bk, _ = block_buckets(g, b, g.cell[b, ia], 1, g.buckets)
-        for t in range(n_bk):
-            bk = g.buckets[t]
-            for s in range(g.start[b, bk], g.start[b, bk + 1]):
-                cnt += _is_shared(q, b, ia, ib, g.order[b, s], r2)
-    else:
-        for j in range(q.shape[1]):
-            cnt += _is_shared(q, b, ia, ib, j, r2)
-    if dist2(q, b, ia, ib) < r2:
-        cnt += 2
-    return cnt
-
-
-@jit_kernel
-def _write_neighbors(q, p, b, m, i, best_j, K, nbr_pos, nbr_vel, nbr_mask):
-    """Offsets of agent m's (UAV i's) K nearest, zero-padded where fewer exist."""
-    D = q.shape[2]
-    for s in range(K):
-        j = best_j[s]
-        if j >= 0:
-            nbr_mask[b, m, s] = 1.0
-            for k in range(D):
-                nbr_pos[b, m, s, k] = q[b, j, k] - q[b, i, k]
-                nbr_vel[b, m, s, k] = p[b, j, k] - p[b, i, k]
-        else:
-            nbr_mask[b, m, s] = 0.0
-            for k in range(D):
-                nbr_pos[b, m, s, k] = 0.0
-                nbr_vel[b, m, s, k] = 0.0
-
-
-@jit_kernel
-def _pair_swarms(q, p, agents, partners, r2, out, work, g):
-    shared, nbr_pos, nbr_vel, nbr_mask = out
-    best_d2, best_j = work
-    K = nbr_pos.shape[2]
-    for b in range(q.shape[0]):
-        for m in range(0, agents.shape[0], 2):  # agents come in (A, B)
-            shared[b, m // 2] = _shared_count(q, b, agents[m], agents[m + 1], r2, g)
-        for m in range(agents.shape[0]):
-            i = agents[m]
-            if g is not None and g.ok[b]:
-                k_nearest_grid(q, b, i, partners[m], g, best_d2, best_j, K)
-            else:
-                k_nearest_all_pairs(q, b, i, partners[m], best_d2, best_j, K)
-            _write_neighbors(q, p, b, m, i, best_j, K, nbr_pos, nbr_vel, nbr_mask)
-
-
-@jit_kernel
-def _pair_kernel(q, p, agents, partners, r2, shared, nbr_pos, nbr_vel, nbr_mask, best_d2, best_j):
-    out = (shared, nbr_pos, nbr_vel, nbr_mask)
-    _pair_swarms(q, p, agents, partners, r2, out, (best_d2, best_j), None)
-
-
-@jit_kernel
-def _pair_grid_kernel(
-    q, p, agents, partners, r2, shared, nbr_pos, nbr_vel, nbr_mask, best_d2, best_j, *grid
-):
-    out = (shared, nbr_pos, nbr_vel, nbr_mask)
-    _pair_swarms(q, p, agents, partners, r2, out, (best_d2, best_j), GridArrays(*grid))
-
-
-def pair_pass(
-    q: np.ndarray,
-    p: np.ndarray,
-    agents: np.ndarray,
-    partners: np.ndarray,
-    radius: float,
-    n_neighbors: int,
-    out: dict[str, np.ndarray] | None = None,
-    grid: NeighborGrid | None = None,
-) -> dict[str, np.ndarray]:
-    """Per-pair shared neighbour counts and each agent's K nearest other UAVs.
-
-    Args:
-        agents: UAV index of each agent, (M,) with pairs laid out as A0, B0, A1, B1, ...
-        partners: partner UAV index of each agent, (M,).
-        grid: ``None`` for all pairs, or a :class:`~pairflock_env.neighbors.NeighborGrid`
-            with ``cell_size >= radius`` built from ``q``'s current values (same results).
-
-    Returns:
-        dict with ``shared`` (B, P) float (N of eq. 28: |N_A & N_B|, plus 2 when A and B are
-        neighbours of each other), ``nbr_pos`` / ``nbr_vel`` (B, M, K, dim) offsets of the K
-        nearest non-partner UAVs (nearest first, ties to the lower index, zero-padded) and
-        ``nbr_mask`` (B, M, K).
-    """
-    B, _N, D = q.shape
-    M = agents.shape[0]
-    K = n_neighbors
-    _check_grid(grid, q.shape, radius**2, "radius")
-    if out is None or out["nbr_pos"].shape != (B, M, K, D):
-        out = {
-            "shared": np.empty((B, M // 2)),
-            "nbr_pos": np.empty((B, M, K, D)),
-            "nbr_vel": np.empty((B, M, K, D)),
-            "nbr_mask": np.empty((B, M, K)),
-            "_best_d2": np.empty(max(K, 1)),
-            "_best_j": np.empty(max(K, 1), np.int64),
-        }
-    args = (
-        q,
-        p,
-        agents,
-        partners,
-        radius**2,
-        out["shared"],
-        out["nbr_pos"],
-        out["nbr_vel"],
-        out["nbr_mask"],
-        out["_best_d2"],
-        out["_best_j"],
-    )
-    if grid is None:
-        _pair_kernel(*args)
-    else:
-        _pair_grid_kernel(*args, *grid.arrays)
     return out

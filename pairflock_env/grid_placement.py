@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .neighbors import GridArrays, NeighborGrid, block_buckets, dist2, jit_inline, jit_kernel
+from .neighbors import GridArrays, NeighborGrid, dist2, jit_inline, jit_kernel, one_ring
 
 __all__ = ["place", "redraw_conflicts"]
 
@@ -32,7 +32,7 @@ def _conflicts(q, fixed, s2, out, *grid):
     for i in range(N):
         hit = False
         if not fixed[i] and g.ok[0]:
-            n_bk, _ = block_buckets(g, 0, g.cell[0, i], 1, g.buckets)
+            n_bk = one_ring(q, 0, i, g, g.buckets)
             for t in range(n_bk):
                 bk = g.buckets[t]
                 for s in range(g.start[0, bk], g.start[0, bk + 1]):

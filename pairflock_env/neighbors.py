@@ -50,15 +50,32 @@ jit_inline = functools.partial(njit, cache=True, inline="always", _nrt=False)
 
 GridArrays = namedtuple(
     "GridArrays",
-    ["h", "inv_h", "origin", "dims", "wrap", "ok", "cell", "start", "order", "buckets"],
+    [
+        "h",
+        "inv_h",
+        "origin",
+        "dims",
+        "wrap",
+        "pad",
+        "stride",
+        "ring",
+        "n_ring",
+        "ok",
+        "bucket",
+        "start",
+        "order",
+        "buckets",
+    ],
 )
 GridArrays.__doc__ = """The arrays of a :class:`NeighborGrid`, as numba kernels take them.
 
-``h`` / ``inv_h``: cell edge (m) and its inverse; ``origin`` (B, 3): lowest corner of each
-swarm; ``dims`` (B, 3) buckets per axis (1 on unused axes); ``wrap`` (B, 3): axis folded;
-``ok`` (B,): grid usable; ``cell`` (B, N, 3) cell coordinates of each UAV; ``start`` (B, C + 1)
-and ``order`` (B, N): bucket c holds UAVs ``order[b, start[b, c]:start[b, c + 1]]``;
-``buckets`` (C,): scratch for the bucket list of one query.
+Per swarm b: ``origin`` (B, 3) lowest corner; ``dims`` (B, 3) cells per axis (1 on unused
+axes); ``wrap`` (B, 3) axis folded; ``pad`` (B, 3) 1 where a border of empty cells surrounds
+the axis; ``stride`` (B, 3) bucket = sum_k (cell_k + pad_k) stride_k; ``ring`` (B, 27) and
+``n_ring`` (B,) bucket offsets of the one-ring (0 offsets when folded); ``ok`` (B,) grid
+usable; ``bucket`` (B, N) each UAV's bucket; ``start`` (B, C + 1) and ``order`` (B, N):
+bucket t holds UAVs ``order[b, start[b, t]:start[b, t + 1]]``. ``h`` / ``inv_h``: cell edge
+(m) and its inverse; ``buckets`` (C,): scratch for the bucket list of one query.
 """
 
 
@@ -135,54 +152,90 @@ def _axis_extent(q, b, k, inv_h):
 
 
 @jit_kernel
-def _swarm_dims(q, b, g):
-    """Origin, buckets per axis and folding of swarm b; False if no grid can hold it."""
-    for k in range(3):
-        g.origin[b, k] = 0.0
-        g.wrap[b, k] = False
-        g.dims[b, k] = 1
-        if k < q.shape[2]:
-            g.origin[b, k], g.dims[b, k] = _axis_extent(q, b, k, g.inv_h)
-            if g.dims[b, k] == 0:
-                return False
+def _swarm_layout(q, b, g):
+    """Origin, cells per axis, folding, padding, strides and one-ring offsets of swarm b;
+    False if no grid can hold it."""
+    D = q.shape[2]
     n = g.dims[b]
-    # fold the longest axis until the buckets fit (float product: no integer overflow)
-    while float(n[0]) * float(n[1]) * float(n[2]) > g.start.shape[1] - 1:
-        k = np.argmax(n)
-        n[k] = (n[k] + 1) // 2
-        g.wrap[b, k] = True
+    for k in range(3):
+        g.origin[b, k], n[k], g.wrap[b, k], g.pad[b, k] = 0.0, 1, False, 0
+        if k < D:
+            g.origin[b, k], n[k] = _axis_extent(q, b, k, g.inv_h)
+            if n[k] == 0:
+                return False
+    n_buckets = g.start.shape[1] - 1
+    # float products: no integer overflow whatever the extent
+    if float(n[0] + 2) * float(n[1] + 2) * float(n[2] + 2 * (D == 3)) <= n_buckets:
+        for k in range(D):  # a border of empty cells: the one-ring never leaves the grid
+            g.pad[b, k] = 1
+    else:  # fold the longest axis until the cells fit
+        while float(n[0]) * float(n[1]) * float(n[2]) > n_buckets:
+            k = np.argmax(n)
+            n[k] = (n[k] + 1) // 2
+            g.wrap[b, k] = True
+    g.stride[b, 2] = 1
+    g.stride[b, 1] = n[2] + 2 * g.pad[b, 2]
+    g.stride[b, 0] = g.stride[b, 1] * (n[1] + 2 * g.pad[b, 1])
+    m = 0
+    if g.pad[b, 0]:
+        for dx in range(-1, 2):
+            for dy in range(-1, 2):
+                for dz in range(-(D == 3), (D == 3) + 1):
+                    g.ring[b, m] = dx * g.stride[b, 0] + dy * g.stride[b, 1] + dz
+                    m += 1
+    g.n_ring[b] = m
     return True
 
 
 @jit_inline
+def _wrap(x, n):
+    """x modulo n, without the division when x is already in range."""
+    if 0 <= x < n:
+        return x
+    return x % n
+
+
+@jit_inline
 def _bucket(g, b, c0, c1, c2):
-    n1, n2 = g.dims[b, 1], g.dims[b, 2]
-    return ((c0 % g.dims[b, 0]) * n1 + c1 % n1) * n2 + c2 % n2
+    """Bucket of the cell (c0, c1, c2) (coordinates folded onto the grid when needed)."""
+    return (
+        (_wrap(c0, g.dims[b, 0]) + g.pad[b, 0]) * g.stride[b, 0]
+        + (_wrap(c1, g.dims[b, 1]) + g.pad[b, 1]) * g.stride[b, 1]
+        + _wrap(c2, g.dims[b, 2])
+        + g.pad[b, 2]
+    )
+
+
+@jit_inline
+def uav_cell(q, b, i, g):
+    """Cell coordinates of UAV i of swarm b (0 on unused axes)."""
+    c0 = int(np.floor((q[b, i, 0] - g.origin[b, 0]) * g.inv_h))
+    c1 = int(np.floor((q[b, i, 1] - g.origin[b, 1]) * g.inv_h))
+    c2 = 0
+    if q.shape[2] == 3:
+        c2 = int(np.floor((q[b, i, 2] - g.origin[b, 2]) * g.inv_h))
+    return c0, c1, c2
 
 
 @jit_kernel
 def _build(q, g):
-    B, N, D = q.shape
+    B, N = q.shape[0], q.shape[1]
     for b in range(B):
-        g.ok[b] = _swarm_dims(q, b, g)
+        g.ok[b] = _swarm_layout(q, b, g)
         if not g.ok[b]:
             continue
         start = g.start[b]
         start[:] = 0
         for i in range(N):
-            for k in range(3):
-                c = 0
-                if k < D:
-                    c = int(np.floor((q[b, i, k] - g.origin[b, k]) * g.inv_h))
-                g.cell[b, i, k] = c
-            c = g.cell[b, i]
-            start[_bucket(g, b, c[0], c[1], c[2]) + 1] += 1
+            c0, c1, c2 = uav_cell(q, b, i, g)
+            t = _bucket(g, b, c0, c1, c2)
+            g.bucket[b, i] = t
+            start[t + 1] += 1
         for t in range(1, start.shape[0]):
             start[t] += start[t - 1]
-        # stable scatter: start[c] runs from the bucket's first slot to its end ...
+        # stable scatter: start[t] runs from the bucket's first slot to its end ...
         for i in range(N):
-            c = g.cell[b, i]
-            t = _bucket(g, b, c[0], c[1], c[2])
+            t = g.bucket[b, i]
             g.order[b, start[t]] = i
             start[t] += 1
         # ... and is shifted back to the bucket's first slot
@@ -207,36 +260,62 @@ def _axis_range(c, n, wrap, L):
 
 
 @jit_inline
-def block_buckets(g, b, c, L, out):
-    """Buckets of the cells within L (Chebyshev, in cells) of cell ``c``, into ``out``.
+def block_buckets(g, b, c0, c1, c2, L, out):
+    """Buckets of the cells within L (Chebyshev, in cells) of cell (c0, c1, c2), into
+    ``out``.
 
     Returns (count, covered): covered means every bucket of the swarm was listed, so the
     query examined every UAV. Otherwise every UAV not listed is farther than
-    ``(L - _ROUNDING) * h`` from any point of cell ``c``.
+    ``(L - _ROUNDING) * h`` from any point of that cell.
     """
-    lo0, hi0, a0 = _axis_range(c[0], g.dims[b, 0], g.wrap[b, 0], L)
-    lo1, hi1, a1 = _axis_range(c[1], g.dims[b, 1], g.wrap[b, 1], L)
-    lo2, hi2, a2 = _axis_range(c[2], g.dims[b, 2], g.wrap[b, 2], L)
+    n0, n1, n2 = g.dims[b, 0], g.dims[b, 1], g.dims[b, 2]
+    lo0, hi0, a0 = _axis_range(c0, n0, g.wrap[b, 0], L)
+    lo1, hi1, a1 = _axis_range(c1, n1, g.wrap[b, 1], L)
+    lo2, hi2, a2 = _axis_range(c2, n2, g.wrap[b, 2], L)
+    # walk the cell coordinates with wrap-around instead of a modulo per bucket
     m = 0
-    for x in range(lo0, hi0 + 1):
-        for y in range(lo1, hi1 + 1):
-            for z in range(lo2, hi2 + 1):
-                out[m] = _bucket(g, b, x, y, z)
+    x = _wrap(lo0, n0)
+    for _ in range(hi0 - lo0 + 1):
+        y = _wrap(lo1, n1)
+        for _ in range(hi1 - lo1 + 1):
+            z = _wrap(lo2, n2)
+            base = (x + g.pad[b, 0]) * g.stride[b, 0] + (y + g.pad[b, 1]) * g.stride[b, 1]
+            for _ in range(hi2 - lo2 + 1):
+                out[m] = base + z + g.pad[b, 2]
                 m += 1
+                z = z + 1 if z + 1 < n2 else 0
+            y = y + 1 if y + 1 < n1 else 0
+        x = x + 1 if x + 1 < n0 else 0
     return m, a0 and a1 and a2
 
 
 @jit_inline
-def point_cell(g, b, point, c):
-    """Cell coordinates of an arbitrary point into ``c``; False if too far for the grid."""
-    for k in range(3):
-        c[k] = 0
-        if k < point.shape[0]:
-            v = (point[k] - g.origin[b, k]) * g.inv_h
-            if not abs(v) < _MAX_CELLS:
-                return False
-            c[k] = int(np.floor(v))
-    return True
+def one_ring(q, b, i, g, out):
+    """Buckets of UAV i's cell and its neighbour cells into ``out``; returns their number.
+    Every UAV closer than the grid's ``cell_size`` to UAV i is in one of them."""
+    if g.n_ring[b] > 0:  # padded grid: fixed offsets from the UAV's bucket
+        t0 = g.bucket[b, i]
+        for t in range(g.n_ring[b]):
+            out[t] = t0 + g.ring[b, t]
+        return g.n_ring[b]
+    c0, c1, c2 = uav_cell(q, b, i, g)
+    return block_buckets(g, b, c0, c1, c2, 1, out)[0]
+
+
+@jit_inline
+def _coord(x, lo, inv_h):
+    """Cell coordinate of x along an axis starting at lo; 2^62 when out of the grid's reach."""
+    v = (x - lo) * inv_h
+    return int(np.floor(v)) if abs(v) < _MAX_CELLS else 2**62
+
+
+@jit_inline
+def point_cell(g, b, point):
+    """Cell coordinates of an arbitrary point, and False if it is too far for the grid."""
+    c0 = _coord(point[0], g.origin[b, 0], g.inv_h)
+    c1 = _coord(point[1], g.origin[b, 1], g.inv_h)
+    c2 = _coord(point[2], g.origin[b, 2], g.inv_h) if point.shape[0] == 3 else 0
+    return c0, c1, c2, max(abs(c0), abs(c1), abs(c2)) < 2**62
 
 
 @jit_inline
@@ -246,40 +325,57 @@ def ring_bound2(g, L):
     return r * r
 
 
+@jit_inline
+def _border_margin(q, b, i, g):
+    """Distance in cells from UAV i to the nearest face of its cell, less the rounding: a
+    search of L rings around UAV i has seen every UAV closer than (L + margin) h."""
+    m = 1.0
+    for k in range(q.shape[2]):
+        v = (q[b, i, k] - g.origin[b, k]) * g.inv_h
+        f = v - np.floor(v)
+        m = min(m, f, 1.0 - f)
+    return m - _ROUNDING
+
+
 @jit_kernel
-def nearest_d2(q, b, i, skip, g, L):
-    """Exact squared distance from UAV i to the nearest UAV other than i and ``skip``
-    (inf if none): blocks of L, 2L, 4L, ... cells until the nearest one is proven."""
-    c = g.cell[b, i]
-    while True:
+def nearest_d2(q, b, i, skip, g, best, L):
+    """Exact squared distance from UAV i to the nearest UAV other than i and ``skip`` (inf if
+    none). ``best``: the nearest over the block of L rings around UAV i (inf and 0 when
+    nothing was searched yet); blocks of 2L, 4L, ... rings follow until it is proven."""
+    c0, c1, c2 = uav_cell(q, b, i, g)
+    margin = _border_margin(q, b, i, g)
+    covered = False
+    while not (covered or best < ((L + margin) * g.h) ** 2):
+        L = max(2 * L, 1)
         best = np.inf
-        nb, covered = block_buckets(g, b, c, L, g.buckets)
+        nb, covered = block_buckets(g, b, c0, c1, c2, L, g.buckets)
         for t in range(nb):
             bk = g.buckets[t]
             for s in range(g.start[b, bk], g.start[b, bk + 1]):
                 j = g.order[b, s]
                 if j != i and j != skip:
                     best = min(best, dist2(q, b, i, j))
-        if covered or best < ring_bound2(g, L):
-            return best
-        L *= 2
+    return best
 
 
 @jit_kernel
 def k_nearest_grid(q, b, i, skip, g, best_d2, best_j, K):
     """:func:`k_nearest_all_pairs` on the grid: the same list, found by expanding blocks."""
-    c = g.cell[b, i]
+    c0, c1, c2 = uav_cell(q, b, i, g)
+    margin = _border_margin(q, b, i, g)
     L = 1
     while True:
         reset_nearest(best_d2, best_j)
-        nb, covered = block_buckets(g, b, c, L, g.buckets)
+        nb, covered = block_buckets(g, b, c0, c1, c2, L, g.buckets)
         for t in range(nb):
             bk = g.buckets[t]
             for s in range(g.start[b, bk], g.start[b, bk + 1]):
                 j = g.order[b, s]
                 if j != i and j != skip:
                     insert_nearest(best_d2, best_j, K, dist2(q, b, i, j), j)
-        if covered or K == 0 or (best_j[K - 1] >= 0 and best_d2[K - 1] < ring_bound2(g, L)):
+        if covered or K == 0:
+            return
+        if best_j[K - 1] >= 0 and best_d2[K - 1] < ((L + margin) * g.h) ** 2:
             return
         L *= 2
 
@@ -306,14 +402,15 @@ def _point_d2(q, b, j, point):
 
 
 @jit_kernel
-def within_radius(q, b, point, r2, exclude, g, c, out):
+def within_radius(q, b, point, r2, exclude, g, out):
     """Indices of the UAVs of swarm b with squared distance to ``point`` below ``r2``
     (``exclude`` left out), in increasing order, into ``out``; returns their number.
     Swarms the grid does not hold, and points far outside it, are scanned in full."""
     n = 0
-    if g.ok[b] and point_cell(g, b, point, c):
-        L = int(np.ceil(np.sqrt(r2) * g.inv_h + _ROUNDING))
-        nb, _ = block_buckets(g, b, c, max(L, 1), g.buckets)
+    c0, c1, c2, near = point_cell(g, b, point)
+    L = np.sqrt(r2) * g.inv_h + _ROUNDING
+    if g.ok[b] and near and L < _MAX_CELLS:
+        nb, _ = block_buckets(g, b, c0, c1, c2, max(int(np.ceil(L)), 1), g.buckets)
         for t in range(nb):
             bk = g.buckets[t]
             for s in range(g.start[b, bk], g.start[b, bk + 1]):
@@ -375,19 +472,23 @@ class NeighborGrid:
         self.shape = (B, N, int(dim))
         self.cell_size = float(cell_size)
         h = self.cell_size * (1.0 + _CELL_MARGIN)
+        C = int(max_cells)
         self.arrays = GridArrays(
-            h,
-            1.0 / h,
-            np.zeros((B, 3)),
-            np.ones((B, 3), np.int64),
-            np.zeros((B, 3), np.bool_),
-            np.zeros(B, np.bool_),
-            np.zeros((B, N, 3), np.int64),
-            np.zeros((B, int(max_cells) + 1), np.int64),
-            np.zeros((B, N), np.int64),
-            np.zeros(int(max_cells), np.int64),
+            h=h,
+            inv_h=1.0 / h,
+            origin=np.zeros((B, 3)),
+            dims=np.ones((B, 3), np.int64),
+            wrap=np.zeros((B, 3), np.bool_),
+            pad=np.zeros((B, 3), np.int64),
+            stride=np.zeros((B, 3), np.int64),
+            ring=np.zeros((B, 27), np.int64),
+            n_ring=np.zeros(B, np.int64),
+            ok=np.zeros(B, np.bool_),
+            bucket=np.zeros((B, N), np.int64),
+            start=np.zeros((B, C + 1), np.int64),
+            order=np.zeros((B, N), np.int64),
+            buckets=np.zeros(max(C, 27), np.int64),
         )
-        self._cell = np.empty(3, np.int64)
         self._hits = np.empty(N, np.int64)
         self._q: np.ndarray | None = None
 
@@ -420,8 +521,24 @@ class NeighborGrid:
         if not (np.isfinite(radius) and radius >= 0):
             raise ValueError(f"radius={radius!r} is invalid: must be a finite number >= 0")
         r2 = float(radius) ** 2
-        n = within_radius(self._q, b, pt, r2, int(exclude), self.arrays, self._cell, self._hits)
+        n = within_radius(self._q, b, pt, r2, int(exclude), self.arrays, self._hits)
         return self._hits[:n].copy()
+
+
+def check_grid(grid, shape: tuple[int, ...], need2: float, what: str) -> None:
+    """Validate the ``grid`` argument of a sweep over arrays of ``shape`` whose one-ring must
+    reach sqrt(need2) (named ``what``); ``None`` (all pairs) always passes."""
+    if grid is None:
+        return
+    if not isinstance(grid, NeighborGrid):
+        raise TypeError(f"grid must be a NeighborGrid or None, got {type(grid).__name__}")
+    if grid.shape != shape:
+        raise ValueError(f"grid is for arrays of shape {grid.shape}, got {shape}")
+    if grid.cell_size**2 < need2:
+        raise ValueError(
+            f"grid cell_size={grid.cell_size} is too small: it must be at least {what} "
+            f"({np.sqrt(need2):g})"
+        )
 
 
 def nearest_indices(q: np.ndarray, point: np.ndarray, k: int) -> np.ndarray:
