@@ -21,6 +21,7 @@ os.environ.setdefault("MKL_NUM_THREADS", "1")
 
 import argparse
 import platform
+import time
 
 import numpy as np
 from _timing import median_rate, print_breakdown
@@ -31,6 +32,12 @@ from pairflock_env.grid_placement import place
 from pairflock_env.neighbors import NeighborGrid
 
 SECTIONS = ("core", "pettingzoo", "breakdown", "kernels")
+_CLOCK = {"clock": time.perf_counter}  # --cpu-time switches to time.process_time
+
+
+def rate(fn, work: float, repeats: int, min_time: float) -> float:
+    """:func:`median_rate` with the clock chosen on the command line."""
+    return median_rate(fn, work, repeats, min_time, clock=_CLOCK["clock"])
 
 
 def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
@@ -39,14 +46,14 @@ def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
     core.reset(seed=0)
     rng = np.random.default_rng(0)
     actions = rng.uniform(-0.2, 0.2, (B, core.n_agents, cfg.dim))
-    return median_rate(lambda: core.step(actions), B * N, repeats, min_time)
+    return rate(lambda: core.step(actions), B * N, repeats, min_time)
 
 
 def bench_pettingzoo(N: int, repeats: int, min_time: float) -> float:
     env = parallel_env(preset="paper", n_uavs=N, max_cycles=10**9)
     env.reset(seed=0)
     act = {a: np.full(2, 0.1, np.float32) for a in env.agents}
-    return median_rate(lambda: env.step(act), 1, repeats, min_time)
+    return rate(lambda: env.step(act), 1, repeats, min_time)
 
 
 def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
@@ -89,10 +96,10 @@ def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
         core.vehicle.advance(core.q.copy(), core.p.copy(), core.flock_accel)
 
     parts = {
-        "total core.step": 1e6 / median_rate(lambda: core.step(actions), 1, repeats, 0.2),
-        "flocking sweep (numba)": 1e6 / median_rate(flock, 1, repeats, 0.2),
-        "pair/neighbour sweep (numba)": 1e6 / median_rate(pairs, 1, repeats, 0.2),
-        "integration (numpy)": 1e6 / median_rate(integrate, 1, repeats, 0.2),
+        "total core.step": 1e6 / rate(lambda: core.step(actions), 1, repeats, 0.2),
+        "flocking sweep (numba)": 1e6 / rate(flock, 1, repeats, 0.2),
+        "pair/neighbour sweep (numba)": 1e6 / rate(pairs, 1, repeats, 0.2),
+        "integration (numpy)": 1e6 / rate(integrate, 1, repeats, 0.2),
     }
     # the rest of the step, by difference: parts timed alone can add up to a little more than
     # the whole (cache effects, timing noise), so the difference is floored at 0
@@ -144,11 +151,12 @@ def bench_kernels(kind: str, N: int, B: int, grid: bool, repeats: int, min_time:
         fl = flocking_pass(prm, q, p, lq, lp, pinned, partner, out=fl, grid=g)
         pp = pair_pass(q, p, agents, partners, cfg.radius, cfg.obs_neighbors, out=pp, grid=g)
 
-    return median_rate(step, B * N, repeats, min_time)
+    return rate(step, B * N, repeats, min_time)
 
 
 def kernel_tables(repeats: int, min_time: float) -> None:
-    sizes = [(100, 1), (300, 1), (1000, 1), (3000, 1), (10000, 1), (1000, 16)]
+    sizes = [(100, 1), (300, 1), (1000, 1), (3000, 1), (10000, 1), (1000, 16), (50, 256)]
+    sizes += [(100, 256)]
     for kind in ("start", "flock"):
         print(
             f"\n## Neighbour kernels alone, {kind} state: UAV-steps/s (median)\n\n"
@@ -176,12 +184,19 @@ def main(argv=None) -> int:
     ap.add_argument(
         "--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS), help="what to run"
     )
+    ap.add_argument(
+        "--cpu-time",
+        action="store_true",
+        help="time with this process's CPU time instead of wall time (steadier when shared)",
+    )
     args = ap.parse_args(argv)
     repeats, min_time = (3, 0.2) if args.quick else (7, 0.5)
+    _CLOCK["clock"] = time.process_time if args.cpu_time else time.perf_counter
 
     print(
         f"# pairflock_env core speed ({platform.processor() or platform.machine()}, "
-        f"{os.cpu_count()} cores visible, 1 thread used)\n"
+        f"{os.cpu_count()} cores visible, 1 thread used, "
+        f"{'CPU' if args.cpu_time else 'wall'} time)\n"
     )
     if "core" in args.sections:
         print("## Core `PairFlockCore.step`: UAV-steps/s (median)\n")

@@ -104,7 +104,7 @@ def _count_unpaired(partner):
     return n
 
 
-@jit_kernel
+@jit_inline
 def _velocity_mismatch(p, pl, partner, n_unpaired, b, vmis, vmax):
     """Mean and max of ||p_i - p_leader|| over the unpaired UAVs (all UAVs if none)."""
     N, D = p.shape[1], p.shape[2]
@@ -125,7 +125,7 @@ def _velocity_mismatch(p, pl, partner, n_unpaired, b, vmis, vmax):
     vmax[b] = vm
 
 
-@jit_kernel
+@jit_inline
 def _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size):
     """Pinning term of eq. 19 into ``acc``, fresh union-find and separations; returns the
     divergence flag (a non-finite or runaway coordinate)."""
@@ -167,7 +167,7 @@ def _union(parent, size, i, j):
         size[y] += size[x]
 
 
-@jit_kernel
+@jit_inline
 def _largest_component(parent, size):
     best = 0
     for i in range(parent.shape[0]):

@@ -102,33 +102,33 @@ def reset_nearest(best_d2, best_j):
 
 @jit_inline
 def insert_nearest(best_d2, best_j, K, d2, j):
-    """Insert candidate j into the sorted K-nearest list.
+    """Insert candidate j into the sorted K-nearest list (K >= 1).
 
     The list holds the K smallest (d2, index) pairs in lexicographic order: ties in distance
     go to the lower index, whatever order candidates arrive in.
     """
-    if K == 0:
-        return
     last = K - 1
-    if not (d2 < best_d2[last] or (d2 == best_d2[last] and j < best_j[last])):
-        return
-    s = last
-    while s > 0 and (best_d2[s - 1] > d2 or (best_d2[s - 1] == d2 and best_j[s - 1] > j)):
-        best_d2[s] = best_d2[s - 1]
-        best_j[s] = best_j[s - 1]
-        s -= 1
-    best_d2[s] = d2
-    best_j[s] = j
+    # one comparison rejects almost every candidate (and lets the caller's loop vectorise)
+    if d2 <= best_d2[last] and (d2 < best_d2[last] or j < best_j[last]):
+        s = last
+        while s > 0 and (best_d2[s - 1] > d2 or (best_d2[s - 1] == d2 and best_j[s - 1] > j)):
+            best_d2[s] = best_d2[s - 1]
+            best_j[s] = best_j[s - 1]
+            s -= 1
+        best_d2[s] = d2
+        best_j[s] = j
 
 
-@jit_kernel
+@jit_inline
 def k_nearest_all_pairs(q, b, i, skip, best_d2, best_j, K):
     """K nearest UAVs of UAV i other than i and ``skip`` by scanning every UAV."""
     reset_nearest(best_d2, best_j)
-    for j in range(q.shape[1]):
-        if j in (i, skip):
-            continue
-        insert_nearest(best_d2, best_j, K, dist2(q, b, i, j), j)
+    worst = np.inf  # best_d2[K - 1], kept in a register
+    for j in range(q.shape[1] if K > 0 else 0):
+        d2 = dist2(q, b, i, j)
+        if d2 <= worst and j != i and j != skip:
+            insert_nearest(best_d2, best_j, K, d2, j)
+            worst = best_d2[K - 1]
 
 
 # ---------------------------------------------------------------------------------------
@@ -371,7 +371,7 @@ def k_nearest_grid(q, b, i, skip, g, best_d2, best_j, K):
             bk = g.buckets[t]
             for s in range(g.start[b, bk], g.start[b, bk + 1]):
                 j = g.order[b, s]
-                if j != i and j != skip:
+                if j != i and j != skip and K > 0:
                     insert_nearest(best_d2, best_j, K, dist2(q, b, i, j), j)
         if covered or K == 0:
             return

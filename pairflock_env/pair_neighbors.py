@@ -33,7 +33,7 @@ def _is_shared(q, b, ia, ib, j, r2):
     return 1 if dist2(q, b, ia, j) < r2 and dist2(q, b, ib, j) < r2 else 0
 
 
-@jit_kernel
+@jit_inline
 def _shared_count(q, b, ia, ib, r2, g):
     """|N_A & N_B| of eq. 28 (Assumption 4), plus 2 when A and B are neighbours: the mutual
     link contributes -2a y - 2b y' to y''."""
@@ -52,7 +52,7 @@ def _shared_count(q, b, ia, ib, r2, g):
     return cnt
 
 
-@jit_kernel
+@jit_inline
 def _write_neighbors(q, p, b, m, i, best_j, K, nbr_pos, nbr_vel, nbr_mask):
     """Offsets of agent m's (UAV i's) K nearest, zero-padded where fewer exist."""
     D = q.shape[2]
