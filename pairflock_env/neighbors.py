@@ -442,8 +442,14 @@ class NeighborGrid:
             collision_distance)``. Longer queries (nearest UAV, K nearest, any radius) expand.
         max_cells: buckets per swarm (memory bound); default ``4 N + 64``.
 
-    Call :meth:`build` with the current positions before querying; a grid describes the
-    positions it was last built from.
+    Call :meth:`build` with the current positions before querying, and again whenever they
+    change: a grid describes the positions it was last built from (it keeps a reference to
+    that array, not a copy). One thread at a time per grid (queries share scratch space).
+
+    The sweeps (:func:`~pairflock_env.flocking.flocking_pass`,
+    :func:`~pairflock_env.pair_neighbors.pair_pass`) take a grid as ``grid=``; other code
+    asks :meth:`within` / :meth:`neighbors_of`, or, inside numba, calls
+    ``within_radius(q, b, point, r2, exclude, GridArrays(*grid.arrays), out)``.
 
     >>> import numpy as np
     >>> q = np.array([[[0.0, 0.0], [1.0, 0.0], [5.0, 0.0]]])
@@ -523,6 +529,14 @@ class NeighborGrid:
         r2 = float(radius) ** 2
         n = within_radius(self._q, b, pt, r2, int(exclude), self.arrays, self._hits)
         return self._hits[:n].copy()
+
+    def neighbors_of(self, b: int, i: int, radius: float) -> np.ndarray:
+        """Indices (increasing) of the UAVs of swarm b closer than ``radius`` to UAV i."""
+        if self._q is None:
+            raise RuntimeError("call build(q) before querying the grid")
+        if not 0 <= i < self.shape[1]:
+            raise ValueError(f"i={i!r} is invalid: must be in [0, {self.shape[1] - 1}]")
+        return self.within(b, self._q[b, i], radius, exclude=i)
 
 
 def check_grid(grid, shape: tuple[int, ...], need2: float, what: str) -> None:

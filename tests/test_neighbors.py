@@ -86,6 +86,10 @@ def test_grid_sweeps_equal_all_pairs(layout, dim):
         p = rng.normal(size=(B, N, dim))
         grid = compare_sweeps(cfg, q, p, K)
         assert grid.ok.tolist() == np.isfinite(q).all(axis=(1, 2)).tolist()
+        if layout == "runaway":  # the far UAV folds the grid instead of growing it
+            assert grid.arrays.wrap.any(axis=1).all()
+        if layout in ("borders", "coincident") and N == 500:  # padded, unfolded cells
+            assert (grid.arrays.n_ring == 3**dim).all() and not grid.arrays.wrap.any()
         # few buckets: far cells share buckets, and every answer stays the same
         compare_sweeps(cfg, q, p, K, max_cells=7)
 
@@ -130,6 +134,9 @@ def test_within_radius_matches_brute_force():
                 assert grid.within(b, point, radius, exclude).tolist() == want
     far = grid.within(0, np.full(D, 1e15), 1e16)  # beyond the grid's cells: scanned in full
     assert far.tolist() == list(range(400))
+    d = np.linalg.norm(q[1] - q[1, 7], axis=1)
+    want = [j for j in np.flatnonzero(d < 9.0) if j != 7]
+    assert grid.neighbors_of(1, 7, 9.0).tolist() == want
 
 
 def test_nearest_indices_is_the_stable_sort():
@@ -229,7 +236,7 @@ def test_placement_reproduces_the_draws(preset, overrides):
 
 def test_placement_gives_up_with_a_clear_error():
     half = np.full((50, 1), 1.0)
-    with pytest.raises(ValueError, match="min_spacing=3.0"):
+    with pytest.raises(ValueError, match=r"min_spacing=3\.0"):
         place(np.random.default_rng(0), half, np.zeros((50, 2)), np.zeros(50, bool), 3.0, 0.0)
     # no spacing: nothing is checked, nothing drawn
     rng, q = np.random.default_rng(0), np.zeros((3, 2))
