@@ -20,6 +20,8 @@ Two ways to find the pairs, same results: all pairs (O(N^2) per swarm), or a
 density). The grid path visits the pairs of each UAV i with j > i in increasing j, exactly as
 the all-pairs loop does, so every floating-point sum is formed in the same order and the two
 paths agree bit for bit. Swarms a grid cannot hold (non-finite coordinates) use all pairs.
+The per-pair sweep for observations and eq. 28 (``pair_pass``) lives in
+:mod:`pairflock_env.pair_neighbors` and is re-exported here.
 
 This is the only implementation of these equations; every view and vehicle model calls it.
 The kernels run single-threaded under numba (compiled code is cached on disk); the small
@@ -229,7 +231,7 @@ def _sort_by_index(nb_j, nb_d2, n):
 
 
 @jit_kernel
-def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, uf, nb_j, nb_d2):
+def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2):
     """:func:`_sweep_all_pairs` over the grid's one-ring pairs, same order and results."""
     N = q.shape[1]
     nc = 0
@@ -250,7 +252,7 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, uf, nb_j, nb_d2):
                 if d2 < prm.coll2:
                     nc += 1
                 if d2 < prm.r2:
-                    _union(uf[0], uf[1], i, j)
+                    _union(parent, size, i, j)
                     nb_j[n] = j
                     nb_d2[n] = d2
                     n += 1
@@ -276,7 +278,7 @@ def _flock_swarms(q, p, ql, pl, h, partner, prm, out, work, g):
         bad[b] = _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size)
         if g is not None and g.ok[b]:
             n_coll[b] = _sweep_grid(
-                q, p, partner, prm, b, g, acc, min_d2, (parent, size), nb_j, nb_d2
+                q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2
             )
         else:
             n_coll[b] = _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size)

@@ -108,7 +108,7 @@ def insert_nearest(best_d2, best_j, K, d2, j):
     go to the lower index, whatever order candidates arrive in.
     """
     last = K - 1
-    # one comparison rejects almost every candidate (and lets the caller's loop vectorise)
+    # one comparison rejects almost every candidate
     if d2 <= best_d2[last] and (d2 < best_d2[last] or j < best_j[last]):
         s = last
         while s > 0 and (best_d2[s - 1] > d2 or (best_d2[s - 1] == d2 and best_j[s - 1] > j)):
