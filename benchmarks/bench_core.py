@@ -28,8 +28,6 @@ from _timing import median_rate, print_breakdown
 
 from pairflock_env import PairFlockCore, make_config, parallel_env
 from pairflock_env.flocking import FlockingParams, flocking_pass, pair_pass
-from pairflock_env.grid_placement import place
-from pairflock_env.neighbors import NeighborGrid
 
 SECTIONS = ("core", "pettingzoo", "breakdown", "kernels")
 _CLOCK = {"clock": time.perf_counter}  # --cpu-time switches to time.process_time
@@ -117,6 +115,10 @@ def kernel_state(kind: str, N: int, B: int, seed: int = 0):
     neighbours. ``"flock"``: a hexagonal lattice at the spacing d = 7 m jittered by 0.3 m, the
     alpha-lattice the protocol converges to (about 6 neighbours each).
     """
+    # imported here, so that the other sections also run against checkouts older than the
+    # grid (before/after comparisons)
+    from pairflock_env.grid_placement import place
+
     rng = np.random.default_rng(seed)
     qs = []
     for _ in range(B):
@@ -134,6 +136,8 @@ def kernel_state(kind: str, N: int, B: int, seed: int = 0):
 
 def bench_kernels(kind: str, N: int, B: int, grid: bool, repeats: int, min_time: float) -> float:
     """UAV-steps/s of the neighbour kernels of one step (all pairs, or grid build + sweeps)."""
+    from pairflock_env.neighbors import NeighborGrid
+
     cfg = make_config("paper", n_uavs=N)
     prm = FlockingParams(cfg)
     q, p = kernel_state(kind, N, B)
