@@ -1,11 +1,14 @@
-"""Speed of the particle core and of the PettingZoo API.
+"""Speed of the particle core, of the neighbour kernels and of the PettingZoo API.
 
-    python benchmarks/bench_core.py            # full grid, prints a markdown table
+    python benchmarks/bench_core.py            # everything, prints markdown tables
     python benchmarks/bench_core.py --quick    # fewer repeats
+    python benchmarks/bench_core.py --sections kernels   # only the neighbour kernels
 
 Reports UAV-steps/s (simulated UAVs x control steps per wall second) of
 ``PairFlockCore.step`` for N in {20, 50, 100} x B in {1, 64, 256} (medians over repeats),
-env steps/s of the PettingZoo ``step()`` at B = 1, and where the time of one core step goes.
+env steps/s of the PettingZoo ``step()`` at B = 1, where the time of one core step goes, and
+the neighbour kernels alone (flocking and pair sweeps, plus the grid build on the grid path)
+with all pairs and with the grid, for N up to 10,000.
 Everything runs on one thread (numba kernels are single-threaded; OMP/MKL pinned to 1).
 """
 
@@ -18,12 +21,21 @@ pin_threads()  # one thread for OpenMP/MKL/OpenBLAS/numba, before numpy loads
 import argparse  # noqa: E402
 import os  # noqa: E402
 import platform  # noqa: E402
+import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 from _timing import median_rate, print_breakdown  # noqa: E402
 
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
-from pairflock_env.flocking import flocking_pass, pair_pass  # noqa: E402
+from pairflock_env.flocking import FlockingParams, flocking_pass, pair_pass  # noqa: E402
+
+SECTIONS = ("core", "pettingzoo", "breakdown", "kernels")
+_CLOCK = {"clock": time.perf_counter}  # --cpu-time switches to time.process_time
+
+
+def rate(fn, work: float, repeats: int, min_time: float) -> float:
+    """:func:`median_rate` with the clock chosen on the command line."""
+    return median_rate(fn, work, repeats, min_time, clock=_CLOCK["clock"])
 
 
 def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
@@ -32,14 +44,14 @@ def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
     core.reset(seed=0)
     rng = np.random.default_rng(0)
     actions = rng.uniform(-0.2, 0.2, (B, core.n_agents, cfg.dim))
-    return median_rate(lambda: core.step(actions), B * N, repeats, min_time)
+    return rate(lambda: core.step(actions), B * N, repeats, min_time)
 
 
 def bench_pettingzoo(N: int, repeats: int, min_time: float) -> float:
     env = parallel_env(preset="paper", n_uavs=N, max_cycles=10**9)
     env.reset(seed=0)
     act = {a: np.full(2, 0.1, np.float32) for a in env.agents}
-    return median_rate(lambda: env.step(act), 1, repeats, min_time)
+    return rate(lambda: env.step(act), 1, repeats, min_time)
 
 
 def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
@@ -82,10 +94,10 @@ def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
         core.vehicle.advance(core.q.copy(), core.p.copy(), core.flock_accel)
 
     parts = {
-        "total core.step": 1e6 / median_rate(lambda: core.step(actions), 1, repeats, 0.2),
-        "flocking sweep (numba)": 1e6 / median_rate(flock, 1, repeats, 0.2),
-        "pair/neighbour sweep (numba)": 1e6 / median_rate(pairs, 1, repeats, 0.2),
-        "integration (numpy)": 1e6 / median_rate(integrate, 1, repeats, 0.2),
+        "total core.step": 1e6 / rate(lambda: core.step(actions), 1, repeats, 0.2),
+        "flocking sweep (numba)": 1e6 / rate(flock, 1, repeats, 0.2),
+        "pair/neighbour sweep (numba)": 1e6 / rate(pairs, 1, repeats, 0.2),
+        "integration (numpy)": 1e6 / rate(integrate, 1, repeats, 0.2),
     }
     # the rest of the step, by difference: parts timed alone can add up to a little more than
     # the whole (cache effects, timing noise), so the difference is floored at 0
@@ -93,6 +105,74 @@ def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
         0.0, parts["total core.step"] - sum(v for k, v in parts.items() if k != "total core.step")
     )
     return parts
+
+
+def kernel_state(kind: str, N: int, B: int, seed: int = 0):
+    """Positions and velocities (B, N, 2) of the paper's swarm scaled to N UAVs.
+
+    ``"start"``: the paper's start density (50 UAVs in a 100 m square) kept for every N, the
+    box growing as sqrt(N), placed with the 2 m minimum spacing: sparse, most UAVs with 0-2
+    neighbours. ``"flock"``: a hexagonal lattice at the spacing d = 7 m jittered by 0.3 m, the
+    alpha-lattice the protocol converges to (about 6 neighbours each).
+    """
+    # imported here, so that the other sections also run against checkouts older than the
+    # grid (before/after comparisons)
+    from pairflock_env.grid_placement import place
+
+    rng = np.random.default_rng(seed)
+    qs = []
+    for _ in range(B):
+        if kind == "start":
+            half = np.full((N, 1), 50.0 * np.sqrt(N / 50))
+            q = place(rng, half, np.zeros((N, 2)), np.zeros(N, bool), 2.0, np.zeros(2))
+        else:
+            n = int(np.ceil(np.sqrt(N)))
+            i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+            lattice = np.stack([i + 0.5 * (j % 2), j * np.sqrt(3) / 2], -1).reshape(-1, 2)
+            q = 7.0 * lattice[:N] + rng.normal(0.0, 0.3, (N, 2))
+        qs.append(q)
+    return np.ascontiguousarray(qs), rng.normal(0.0, 1.0, (B, N, 2))
+
+
+def bench_kernels(kind: str, N: int, B: int, grid: bool, repeats: int, min_time: float) -> float:
+    """UAV-steps/s of the neighbour kernels of one step (all pairs, or grid build + sweeps)."""
+    from pairflock_env.neighbors import NeighborGrid
+
+    cfg = make_config("paper", n_uavs=N)
+    prm = FlockingParams(cfg)
+    q, p = kernel_state(kind, N, B)
+    lq, lp, pinned = np.zeros((B, 2)), np.zeros((B, 2)), np.ones((B, N))
+    agents, partners = np.array([0, 1]), np.array([1, 0])
+    partner = np.full(N, -1, np.int64)
+    partner[agents] = partners
+    g = NeighborGrid(B, N, 2, max(cfg.radius, cfg.collision_distance)) if grid else None
+    fl = pp = None
+
+    def step():
+        nonlocal fl, pp
+        if g is not None:
+            g.build(q)
+        fl = flocking_pass(prm, q, p, lq, lp, pinned, partner, out=fl, grid=g)
+        pp = pair_pass(q, p, agents, partners, cfg.radius, cfg.obs_neighbors, out=pp, grid=g)
+
+    return rate(step, B * N, repeats, min_time)
+
+
+def kernel_tables(repeats: int, min_time: float) -> None:
+    sizes = [(100, 1), (300, 1), (1000, 1), (3000, 1), (10000, 1), (1000, 16), (50, 256)]
+    sizes += [(100, 256)]
+    for kind in ("start", "flock"):
+        print(
+            f"\n## Neighbour kernels alone, {kind} state: UAV-steps/s (median)\n\n"
+            "| N | B | all pairs | grid | grid / all pairs |\n|---|---|---|---|---|"
+        )
+        rates = {}
+        for N, B in sizes:
+            a = bench_kernels(kind, N, B, False, repeats, min_time)
+            g = rates[N, B] = bench_kernels(kind, N, B, True, repeats, min_time)
+            print(f"| {N:,} | {B} | {a:,.0f} | {g:,.0f} | {g / a:.1f}x |")
+        ratio = rates[300, 1] / rates[10000, 1]
+        print(f"\nGrid: per-UAV cost at N = 10,000 / at N = 300 (B = 1): {ratio:.2f}")
 
 
 def main(argv=None) -> int:
@@ -105,26 +185,41 @@ def main(argv=None) -> int:
     )
     ap.add_argument("--n-uavs", type=int, nargs="+", default=[20, 50, 100])
     ap.add_argument("--batch", type=int, nargs="+", default=[1, 64, 256])
+    ap.add_argument(
+        "--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS), help="what to run"
+    )
+    ap.add_argument(
+        "--cpu-time",
+        action="store_true",
+        help="time with this process's CPU time instead of wall time (steadier when shared)",
+    )
     args = ap.parse_args(argv)
     repeats, min_time = (3, 0.2) if args.quick else (7, 0.5)
+    _CLOCK["clock"] = time.process_time if args.cpu_time else time.perf_counter
 
     print(
         f"# pairflock_env core speed ({platform.processor() or platform.machine()}, "
-        f"{os.cpu_count()} cores visible, 1 thread used)\n"
+        f"{os.cpu_count()} cores visible, 1 thread used, "
+        f"{'CPU' if args.cpu_time else 'wall'} time)\n"
     )
-    print("## Core `PairFlockCore.step`: UAV-steps/s (median)\n")
-    print("| N \\ B | " + " | ".join(str(b) for b in args.batch) + " |")
-    print("|---|" + "---|" * len(args.batch))
-    for N in args.n_uavs:
-        cells = [f"{bench_core(N, B, repeats, min_time):,.0f}" for B in args.batch]
-        print(f"| {N} | " + " | ".join(cells) + " |")
-    print("\n## PettingZoo `parallel_env.step()` at B = 1: env steps/s (median)\n")
-    print("| N | steps/s | UAV-steps/s |\n|---|---|---|")
-    for N in args.n_uavs:
-        r = bench_pettingzoo(N, repeats, min_time)
-        print(f"| {N} | {r:,.0f} | {r * N:,.0f} |")
-    for N, B in ((100, 256), (100, 1)):
-        print_breakdown(f"Where the time goes: N = {N}, B = {B}", breakdown(N, B, repeats))
+    if "core" in args.sections:
+        print("## Core `PairFlockCore.step`: UAV-steps/s (median)\n")
+        print("| N \\ B | " + " | ".join(str(b) for b in args.batch) + " |")
+        print("|---|" + "---|" * len(args.batch))
+        for N in args.n_uavs:
+            cells = [f"{bench_core(N, B, repeats, min_time):,.0f}" for B in args.batch]
+            print(f"| {N} | " + " | ".join(cells) + " |")
+    if "pettingzoo" in args.sections:
+        print("\n## PettingZoo `parallel_env.step()` at B = 1: env steps/s (median)\n")
+        print("| N | steps/s | UAV-steps/s |\n|---|---|---|")
+        for N in args.n_uavs:
+            r = bench_pettingzoo(N, repeats, min_time)
+            print(f"| {N} | {r:,.0f} | {r * N:,.0f} |")
+    if "breakdown" in args.sections:
+        for N, B in ((100, 256), (100, 1)):
+            print_breakdown(f"Where the time goes: N = {N}, B = {B}", breakdown(N, B, repeats))
+    if "kernels" in args.sections:
+        kernel_tables(repeats, min_time)
     return 0
 
 

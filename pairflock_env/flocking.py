@@ -1,4 +1,4 @@
-"""The flocking protocol of eqs. 11-19 and the proximity quantities, in one O(N^2) sweep.
+"""The flocking protocol of eqs. 11-19 and the proximity quantities, in one sweep over pairs.
 
 For every UAV i of every swarm b (arrays shaped (B, N, dim)):
 
@@ -15,145 +15,311 @@ pairs closer than the collision distance, the size of the largest connected comp
 the interaction graph (union-find), the velocity mismatch to the leader, and a per-swarm
 flag for non-finite or runaway states.
 
+Two ways to find the pairs, same results: all pairs (O(N^2) per swarm), or a
+:class:`~pairflock_env.neighbors.NeighborGrid` (O(N) per swarm for a flock of bounded
+density). The grid path visits the pairs of each UAV i with j > i in increasing j, exactly as
+the all-pairs loop does, so every floating-point sum is formed in the same order and the two
+paths agree bit for bit. Swarms a grid cannot hold (non-finite coordinates) use all pairs.
+The per-pair sweep for observations and eq. 28 (``pair_pass``) lives in
+:mod:`pairflock_env.pair_neighbors` and is re-exported here.
+
 This is the only implementation of these equations; every view and vehicle model calls it.
-The kernels run single-threaded under numba (one JIT-compiled function per dtype signature;
-compiled code is cached on disk).
+The kernels run single-threaded under numba (compiled code is cached on disk); the small
+helpers below are compiled into the kernels that call them.
 """
 
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
-from numba import njit
 
 from .config import PairFlockConfig
+from .neighbors import (
+    GridArrays,
+    NeighborGrid,
+    check_grid,
+    dist2,
+    jit_inline,
+    jit_kernel,
+    nearest_d2,
+    one_ring,
+    ring_bound2,
+)
+from .pair_neighbors import pair_pass  # re-exported: the pair sweep lived here before
 
-__all__ = ["FlockingParams", "flocking_pass", "pair_pass"]
+__all__ = ["FlockScalars", "FlockingParams", "flocking_pass", "pair_pass"]
+
+FlockScalars = namedtuple(
+    "FlockScalars", ["a", "b_r", "inv_s2", "r2", "cons", "c1", "c2", "coll2", "limit"]
+)
+FlockScalars.__doc__ = "The scalar parameters of the flocking sweep, as the kernels read them."
 
 
 class FlockingParams:
-    """Scalar parameters of the flocking sweep, unpacked once from a config."""
+    """Scalar parameters of the flocking sweep, unpacked once from a config.
 
-    __slots__ = ("a", "b_r", "c1", "c2", "coll2", "consensus", "inv_sigma2", "limit", "r2")
+    Attributes ``a``, ``b_r``, ``inv_sigma2``, ``r2``, ``consensus``, ``c1``, ``c2``,
+    ``coll2``, ``limit`` read one float64 vector (``vector``, in :data:`FlockScalars` order),
+    which is what the kernels receive.
+    """
+
+    __slots__ = ("vector",)
 
     def __init__(self, cfg: PairFlockConfig) -> None:
-        self.a = cfg.attraction
-        self.b_r = cfg.repulsion
-        self.inv_sigma2 = 1.0 / cfg.repulsion_sigma2
-        self.r2 = cfg.radius**2
-        self.consensus = cfg.consensus
-        self.c1 = cfg.pin_position_gain
-        self.c2 = cfg.pin_velocity_gain
-        self.coll2 = cfg.collision_distance**2
-        self.limit = cfg.divergence_limit
+        self.vector = np.array(
+            [
+                cfg.attraction,
+                cfg.repulsion,
+                1.0 / cfg.repulsion_sigma2,
+                cfg.radius**2,
+                cfg.consensus,
+                cfg.pin_position_gain,
+                cfg.pin_velocity_gain,
+                cfg.collision_distance**2,
+                cfg.divergence_limit,
+            ],
+            dtype=np.float64,
+        )
 
 
-@njit(cache=True, nogil=True)
+for _k, _name in enumerate(
+    ("a", "b_r", "inv_sigma2", "r2", "consensus", "c1", "c2", "coll2", "limit")
+):
+    setattr(FlockingParams, _name, property(lambda self, k=_k: float(self.vector[k])))
+
+
+@jit_inline
+def _scalars(v):
+    return FlockScalars(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8])
+
+
+# ---------------------------------------------------------------------------------------
+# per-swarm pieces of the flocking sweep
+# ---------------------------------------------------------------------------------------
+@jit_inline
+def _count_unpaired(partner):
+    n = 0
+    for i in range(partner.shape[0]):
+        if partner[i] < 0:
+            n += 1
+    return n
+
+
+@jit_inline
+def _velocity_mismatch(p, pl, partner, n_unpaired, b, vmis, vmax):
+    """Mean and max of ||p_i - p_leader|| over the unpaired UAVs (all UAVs if none)."""
+    N, D = p.shape[1], p.shape[2]
+    vsum = 0.0
+    vm = 0.0
+    for i in range(N):
+        if n_unpaired > 0 and partner[i] >= 0:
+            continue
+        v2 = 0.0
+        for k in range(D):
+            dv = p[b, i, k] - pl[b, k]
+            v2 += dv * dv
+        v = np.sqrt(v2)
+        vsum += v
+        if v > vm:
+            vm = v
+    vmis[b] = vsum / (n_unpaired if n_unpaired > 0 else N)
+    vmax[b] = vm
+
+
+@jit_inline
+def _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size):
+    """Pinning term of eq. 19 into ``acc``, fresh union-find and separations; returns the
+    divergence flag (a non-finite or runaway coordinate)."""
+    N, D = q.shape[1], q.shape[2]
+    is_bad = False
+    for i in range(N):
+        parent[i] = i
+        size[i] = 1
+        min_d2[b, i] = np.inf
+        for k in range(D):
+            x = q[b, i, k]
+            v = p[b, i, k]
+            if not (abs(x) <= prm.limit and abs(v) <= prm.limit):
+                is_bad = True
+            acc[b, i, k] = h[b, i] * (
+                prm.c1 * (ql[b, k] - q[b, i, k]) + prm.c2 * (pl[b, k] - p[b, i, k])
+            )
+    return is_bad
+
+
+@jit_inline
+def _find(parent, x):
+    """Root of x in the union-find forest, halving the path on the way."""
+    while parent[x] != x:
+        parent[x] = parent[parent[x]]
+        x = parent[x]
+    return x
+
+
+@jit_inline
+def _union(parent, size, i, j):
+    """Join the components of i and j, the smaller under the larger (shallow trees)."""
+    x = _find(parent, i)
+    y = _find(parent, j)
+    if x != y:
+        if size[x] > size[y]:
+            x, y = y, x
+        parent[x] = y
+        size[y] += size[x]
+
+
+@jit_inline
+def _largest_component(parent, size):
+    best = 0
+    for i in range(parent.shape[0]):
+        if parent[i] == i and size[i] > best:
+            best = size[i]
+    return best
+
+
+@jit_inline
+def _pair_force(q, p, prm, b, i, j, d2, acc):
+    """Eqs. 13-18 for the neighbours i < j: symmetric, so f_ij = -f_ji."""
+    w = prm.a - prm.b_r * np.exp(-d2 * prm.inv_s2)
+    for k in range(q.shape[2]):
+        f = w * (q[b, j, k] - q[b, i, k]) + prm.cons * (p[b, j, k] - p[b, i, k])
+        acc[b, i, k] += f
+        acc[b, j, k] -= f
+
+
+@jit_inline
+def _separation(min_d2, b, i, j, partner_i, d2):
+    """Nearest non-partner distances of i and j, updated with their pair."""
+    if j != partner_i:
+        if d2 < min_d2[b, i]:
+            min_d2[b, i] = d2
+        if d2 < min_d2[b, j]:
+            min_d2[b, j] = d2
+
+
+@jit_kernel
+def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size):
+    """Every pair i < j of swarm b; returns the number of collisions."""
+    N = q.shape[1]
+    nc = 0
+    for i in range(N):
+        pi = partner[i]
+        for j in range(i + 1, N):
+            d2 = dist2(q, b, i, j)
+            _separation(min_d2, b, i, j, pi, d2)
+            if d2 < prm.coll2:
+                nc += 1
+            if d2 < prm.r2:
+                _pair_force(q, p, prm, b, i, j, d2, acc)
+                _union(parent, size, i, j)
+    return nc
+
+
+@jit_inline
+def _sort_by_index(nb_j, nb_d2, n):
+    """Insertion sort of the first n neighbours by index (the lists are short)."""
+    for t in range(1, n):
+        j, d2 = nb_j[t], nb_d2[t]
+        s = t
+        while s > 0 and nb_j[s - 1] > j:
+            nb_j[s] = nb_j[s - 1]
+            nb_d2[s] = nb_d2[s - 1]
+            s -= 1
+        nb_j[s] = j
+        nb_d2[s] = d2
+
+
+@jit_kernel
+def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2):
+    """:func:`_sweep_all_pairs` over the grid's one-ring pairs, same order and results."""
+    N = q.shape[1]
+    nc = 0
+    for i in range(N):
+        pi = partner[i]
+        n_bk = one_ring(q, b, i, g, g.buckets)
+        n = 0
+        for t in range(n_bk):
+            bk = g.buckets[t]
+            end = g.start[b, bk + 1]
+            s0 = end  # bucket lists increase: the UAVs after i are a tail
+            while s0 > g.start[b, bk] and g.order[b, s0 - 1] > i:
+                s0 -= 1
+            for s in range(s0, end):
+                j = g.order[b, s]
+                d2 = dist2(q, b, i, j)
+                _separation(min_d2, b, i, j, pi, d2)
+                if d2 < prm.coll2:
+                    nc += 1
+                if d2 < prm.r2:
+                    _union(parent, size, i, j)
+                    nb_j[n] = j
+                    nb_d2[n] = d2
+                    n += 1
+        _sort_by_index(nb_j, nb_d2, n)
+        for t in range(n):
+            _pair_force(q, p, prm, b, i, nb_j[t], nb_d2[t], acc)
+    # the one-ring proves separations shorter than a cell; the others need a wider search
+    bound = ring_bound2(g, 1)
+    for i in range(N):
+        if not min_d2[b, i] < bound:
+            min_d2[b, i] = nearest_d2(q, b, i, partner[i], g, min_d2[b, i], 1)
+    return nc
+
+
+@jit_kernel
+def _flock_swarms(q, p, ql, pl, h, partner, prm, out, work, g):
+    """Every swarm: grid sweep where ``g`` holds the swarm, all pairs otherwise."""
+    acc, min_d2, n_coll, lcc, bad, vmis, vmax = out
+    parent, size, nb_j, nb_d2 = work
+    n_unpaired = _count_unpaired(partner)
+    for b in range(q.shape[0]):
+        _velocity_mismatch(p, pl, partner, n_unpaired, b, vmis, vmax)
+        bad[b] = _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size)
+        if g is not None and g.ok[b]:
+            n_coll[b] = _sweep_grid(
+                q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2
+            )
+        else:
+            n_coll[b] = _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size)
+        lcc[b] = _largest_component(parent, size)
+
+
+# The entry points take arrays one by one: the dispatcher types plain arrays fastest, which
+# matters for small swarms, where a sweep takes a few microseconds.
+@jit_kernel
 def _flocking_kernel(
+    q, p, ql, pl, h, partner, prm, acc, min_d2, ncol, lcc, bad, vmis, vmax, parent, size, nbj, nbd
+):
+    out = (acc, min_d2, ncol, lcc, bad, vmis, vmax)
+    _flock_swarms(q, p, ql, pl, h, partner, _scalars(prm), out, (parent, size, nbj, nbd), None)
+
+
+@jit_kernel
+def _flocking_grid_kernel(
     q,
     p,
     ql,
     pl,
     h,
     partner,
-    a,
-    b_r,
-    inv_s2,
-    r2,
-    cons,
-    c1,
-    c2,
-    coll2,
-    limit,
+    prm,
     acc,
     min_d2,
-    n_coll,
+    ncol,
     lcc,
     bad,
     vmis,
     vmax,
     parent,
     size,
+    nbj,
+    nbd,
+    *grid,
 ):
-    B, N, D = q.shape
-    n_unpaired = 0
-    for i in range(N):
-        if partner[i] < 0:
-            n_unpaired += 1
-    for b in range(B):
-        # velocity mismatch to the leader over the unpaired UAVs (all UAVs if none)
-        vsum = 0.0
-        vm = 0.0
-        for i in range(N):
-            if n_unpaired > 0 and partner[i] >= 0:
-                continue
-            v2 = 0.0
-            for k in range(D):
-                dv = p[b, i, k] - pl[b, k]
-                v2 += dv * dv
-            v = np.sqrt(v2)
-            vsum += v
-            if v > vm:
-                vm = v
-        vmis[b] = vsum / (n_unpaired if n_unpaired > 0 else N)
-        vmax[b] = vm
-        # divergence check and pinning term (eq. 19)
-        is_bad = False
-        for i in range(N):
-            parent[i] = i
-            size[i] = 0
-            min_d2[b, i] = np.inf
-            for k in range(D):
-                x = q[b, i, k]
-                v = p[b, i, k]
-                if not (abs(x) <= limit and abs(v) <= limit):
-                    is_bad = True
-                acc[b, i, k] = h[b, i] * (
-                    c1 * (ql[b, k] - q[b, i, k]) + c2 * (pl[b, k] - p[b, i, k])
-                )
-        bad[b] = is_bad
-        nc = 0
-        for i in range(N):
-            pi = partner[i]
-            for j in range(i + 1, N):
-                d2 = 0.0
-                for k in range(D):
-                    dx = q[b, j, k] - q[b, i, k]
-                    d2 += dx * dx
-                if j != pi:
-                    if d2 < min_d2[b, i]:
-                        min_d2[b, i] = d2
-                    if d2 < min_d2[b, j]:
-                        min_d2[b, j] = d2
-                if d2 < coll2:
-                    nc += 1
-                if d2 < r2:
-                    # eqs. 13-18: symmetric, so f_ij = -f_ji
-                    w = a - b_r * np.exp(-d2 * inv_s2)
-                    for k in range(D):
-                        f = w * (q[b, j, k] - q[b, i, k]) + cons * (p[b, j, k] - p[b, i, k])
-                        acc[b, i, k] += f
-                        acc[b, j, k] -= f
-                    # union-find with path halving
-                    x = i
-                    while parent[x] != x:
-                        parent[x] = parent[parent[x]]
-                        x = parent[x]
-                    y = j
-                    while parent[y] != y:
-                        parent[y] = parent[parent[y]]
-                        y = parent[y]
-                    if x != y:
-                        parent[x] = y
-        n_coll[b] = nc
-        best = 0
-        for i in range(N):
-            x = i
-            while parent[x] != x:
-                x = parent[x]
-            size[x] += 1
-            if size[x] > best:
-                best = size[x]
-        lcc[b] = best
+    out = (acc, min_d2, ncol, lcc, bad, vmis, vmax)
+    work = (parent, size, nbj, nbd)
+    _flock_swarms(q, p, ql, pl, h, partner, _scalars(prm), out, work, GridArrays(*grid))
 
 
 def flocking_pass(
@@ -165,6 +331,7 @@ def flocking_pass(
     pinned: np.ndarray,
     partner: np.ndarray,
     out: dict[str, np.ndarray] | None = None,
+    grid: NeighborGrid | None = None,
 ) -> dict[str, np.ndarray]:
     """Flocking acceleration and proximity quantities of every UAV.
 
@@ -174,6 +341,9 @@ def flocking_pass(
         pinned: h_i of eq. 6 as 0/1 floats, (B, N).
         partner: partner index of each UAV or -1, (N,) int64.
         out: preallocated outputs to reuse (as returned by a previous call).
+        grid: ``None`` for all pairs, or a :class:`~pairflock_env.neighbors.NeighborGrid`
+            with ``cell_size >= max(radius, collision_distance)``, built from ``q``'s current
+            values. Both give identical results.
 
     Returns:
         dict with ``acc`` (B, N, dim) m/s^2, ``min_d2`` (B, N) squared distance to the nearest
@@ -183,6 +353,7 @@ def flocking_pass(
         paired). Per-swarm sums run sequentially, so results do not depend on B.
     """
     B, N, D = q.shape
+    check_grid(grid, q.shape, max(params.r2, params.coll2), "max(radius, collision_distance)")
     if out is None or out["acc"].shape != q.shape:
         out = {
             "acc": np.empty((B, N, D)),
@@ -194,24 +365,17 @@ def flocking_pass(
             "velocity_mismatch_max": np.empty(B),
             "_parent": np.empty(N, np.int64),
             "_size": np.empty(N, np.int64),
+            "_nb_j": np.empty(N, np.int64),
+            "_nb_d2": np.empty(N),
         }
-    pr = params
-    _flocking_kernel(
+    args = (
         q,
         p,
         leader_q,
         leader_p,
         pinned,
         partner,
-        pr.a,
-        pr.b_r,
-        pr.inv_sigma2,
-        pr.r2,
-        pr.consensus,
-        pr.c1,
-        pr.c2,
-        pr.coll2,
-        pr.limit,
+        params.vector,
         out["acc"],
         out["min_d2"],
         out["collisions"],
@@ -221,119 +385,11 @@ def flocking_pass(
         out["velocity_mismatch_max"],
         out["_parent"],
         out["_size"],
+        out["_nb_j"],
+        out["_nb_d2"],
     )
-    return out
-
-
-@njit(cache=True, nogil=True)
-def _pair_kernel(q, p, agents, partners, r2, shared, nbr_pos, nbr_vel, nbr_mask, best_d2, best_j):
-    B, N, D = q.shape
-    M = agents.shape[0]
-    K = nbr_pos.shape[2]
-    for b in range(B):
-        # shared neighbour count of each pair (eq. 28, Assumption 4); agents come in (A, B)
-        for m in range(0, M, 2):
-            ia = agents[m]
-            ib = agents[m + 1]
-            cnt = 0
-            for j in range(N):
-                if j in (ia, ib):
-                    continue
-                da = 0.0
-                db = 0.0
-                for k in range(D):
-                    x = q[b, j, k] - q[b, ia, k]
-                    da += x * x
-                    x = q[b, j, k] - q[b, ib, k]
-                    db += x * x
-                if da < r2 and db < r2:
-                    cnt += 1
-            dab = 0.0
-            for k in range(D):
-                x = q[b, ib, k] - q[b, ia, k]
-                dab += x * x
-            if dab < r2:
-                cnt += 2  # the mutual link contributes -2a y - 2b y' to y''
-            shared[b, m // 2] = cnt
-        # K nearest non-partner UAVs of each agent, sorted by distance
-        for m in range(M):
-            i = agents[m]
-            pi = partners[m]
-            for s in range(K):
-                best_d2[s] = np.inf
-                best_j[s] = -1
-            for j in range(N):
-                if j in (i, pi):
-                    continue
-                d2 = 0.0
-                for k in range(D):
-                    x = q[b, j, k] - q[b, i, k]
-                    d2 += x * x
-                if K > 0 and d2 < best_d2[K - 1]:
-                    s = K - 1
-                    while s > 0 and best_d2[s - 1] > d2:
-                        best_d2[s] = best_d2[s - 1]
-                        best_j[s] = best_j[s - 1]
-                        s -= 1
-                    best_d2[s] = d2
-                    best_j[s] = j
-            for s in range(K):
-                j = best_j[s]
-                if j >= 0:
-                    nbr_mask[b, m, s] = 1.0
-                    for k in range(D):
-                        nbr_pos[b, m, s, k] = q[b, j, k] - q[b, i, k]
-                        nbr_vel[b, m, s, k] = p[b, j, k] - p[b, i, k]
-                else:
-                    nbr_mask[b, m, s] = 0.0
-                    for k in range(D):
-                        nbr_pos[b, m, s, k] = 0.0
-                        nbr_vel[b, m, s, k] = 0.0
-
-
-def pair_pass(
-    q: np.ndarray,
-    p: np.ndarray,
-    agents: np.ndarray,
-    partners: np.ndarray,
-    radius: float,
-    n_neighbors: int,
-    out: dict[str, np.ndarray] | None = None,
-) -> dict[str, np.ndarray]:
-    """Per-pair shared neighbour counts and each agent's K nearest other UAVs.
-
-    Args:
-        agents: UAV index of each agent, (M,) with pairs laid out as A0, B0, A1, B1, ...
-        partners: partner UAV index of each agent, (M,).
-
-    Returns:
-        dict with ``shared`` (B, P) float (N of eq. 28: |N_A & N_B|, plus 2 when A and B are
-        neighbours of each other), ``nbr_pos`` / ``nbr_vel`` (B, M, K, dim) offsets of the K
-        nearest non-partner UAVs (nearest first, zero-padded) and ``nbr_mask`` (B, M, K).
-    """
-    B, _N, D = q.shape
-    M = agents.shape[0]
-    K = n_neighbors
-    if out is None or out["nbr_pos"].shape != (B, M, K, D):
-        out = {
-            "shared": np.empty((B, M // 2)),
-            "nbr_pos": np.empty((B, M, K, D)),
-            "nbr_vel": np.empty((B, M, K, D)),
-            "nbr_mask": np.empty((B, M, K)),
-            "_best_d2": np.empty(max(K, 1)),
-            "_best_j": np.empty(max(K, 1), np.int64),
-        }
-    _pair_kernel(
-        q,
-        p,
-        agents,
-        partners,
-        radius**2,
-        out["shared"],
-        out["nbr_pos"],
-        out["nbr_vel"],
-        out["nbr_mask"],
-        out["_best_d2"],
-        out["_best_j"],
-    )
+    if grid is None:
+        _flocking_kernel(*args)
+    else:
+        _flocking_grid_kernel(*args, *grid.arrays)
     return out
