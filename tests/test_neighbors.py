@@ -208,9 +208,9 @@ def start_boxes(cfg):
 
 PLACEMENT_CASES = [
     ("paper", {}),
-    ("paper", dict(n_uavs=200, swarm_half_width=20.0)),
+    ("paper", dict(n_uavs=200, swarm_half_width=22.0)),
     ("paper", dict(n_uavs=150, dim=3, swarm_half_width=7.0, min_init_spacing=1.5)),
-    ("paper", dict(n_uavs=40, init="random", pairs=((0, 1), (2, 3)), swarm_half_width=8.0)),
+    ("paper", dict(n_uavs=40, init="random", pairs=((0, 1), (2, 3)), swarm_half_width=9.5)),
     ("paper", dict(n_uavs=30, swarm_half_width=(30.0, 0.2), min_init_spacing=0.9)),
     ("paper-quadrotor", {}),
 ]
