@@ -130,3 +130,22 @@ def test_packaged_names_load_through_the_public_entry_points(tmp_path, monkeypat
         err = capsys.readouterr().err
         assert "'no_such_" in err and err.rstrip().endswith(", ".join(names())), err
     assert not os.listdir(tmp_path)  # nothing written
+
+
+def test_ci_runs_the_wheel_check_with_the_declared_scripts():
+    """``.ci/run`` calls ``.ci/wheel-check``, which reads the console scripts from pyproject
+    (so the list cannot drift) and runs the packaged names from outside the checkout."""
+    check = ROOT / ".ci" / "wheel-check"
+    assert os.access(check, os.X_OK)
+    assert ".ci/wheel-check" in [
+        line.split("#")[0].strip() for line in (ROOT / ".ci" / "run").read_text().splitlines()
+    ]
+    text = check.read_text()
+    assert "set -euo pipefail" in text and '["project"]["scripts"]' in text
+    for command in (
+        'pairflock-reproduce" --check',
+        'pairflock-evaluate" pair_n20_a50',
+        'pairflock-train" --config pair_n20_a50',
+        "sb3:pair_n20_a50",
+    ):
+        assert command in text, command
