@@ -37,6 +37,7 @@ EPILOG = textwrap.dedent(
 
     examples:
       python -m train --config train/configs/pair_n20_a50.yaml --out runs/pair_n20_a50
+      python -m train --config pair_n20_a50 --out runs/pair_n20_a50   # the packaged config
       python -m train --algo sac --set n_uavs=20 --set pair_accel_limit=50 \\
           --total-steps 300000 --hp buffer_size=200000 --out runs/sac
       python -m train --resume runs/pair_n20_a50          # continue from the latest checkpoint
@@ -81,7 +82,8 @@ def _task_options(p: argparse.ArgumentParser) -> None:
         "--config",
         type=Path,
         metavar="YAML",
-        help="settings file (keys of train.settings.RunSettings); flags override it",
+        help="settings file (keys of train.settings.RunSettings), or the name of a packaged "
+        "one (e.g. pair_n20_a50: train/configs/pair_n20_a50.yaml); flags override it",
     )
     g.add_argument("--algo", choices=ALGOS, help="algorithm (default: ppo)")
     g.add_argument("--preset", help="pairflock_env preset (default: paper)")

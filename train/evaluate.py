@@ -3,6 +3,7 @@ rollout and metrics (``baselines.evaluation.rollout``), on held-out seeds.
 
     python -m train.evaluate models/pair_n20_a50.zip                 # N = 20, 10 seeds
     python -m train.evaluate models/pair_n20_a50.zip --n-uavs 20 50 100 --init corners random
+    python -m train.evaluate pair_n20_a50        # a packaged policy by name, from any folder
 
 The task is the one the model was evaluated on during training (stored in the model file:
 preset and overrides, e.g. ``pair_accel_limit=50``, the preset's 50 s episode), with ``n_uavs``
@@ -115,7 +116,12 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=__doc__.split("\n\n", 2)[2],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("model", type=Path, help="model zip written by python -m train")
+    p.add_argument(
+        "model",
+        type=Path,
+        help="model zip written by python -m train, or a packaged policy's name "
+        "(e.g. pair_n20_a50; baselines.controllers.zoo)",
+    )
     p.add_argument("--n-uavs", type=int, nargs="+", default=[20], help="swarm sizes (default 20)")
     p.add_argument(
         "--init",
@@ -168,10 +174,13 @@ def build_parser() -> argparse.ArgumentParser:
 def _check_args(args: argparse.Namespace, parser: argparse.ArgumentParser) -> dict[str, Any]:
     """Validate the options; returns the ``--set`` overrides."""
     from baselines import POLICIES
+    from baselines.controllers.zoo import resolve_model
     from baselines.evaluation.specs import parse_assignment
 
-    if not args.model.is_file():
-        parser.error(f"model {str(args.model)!r} does not exist")
+    try:
+        args.model = resolve_model(args.model)
+    except FileNotFoundError as e:
+        parser.error(str(e))
     if args.seeds < 1 or args.first_seed < 0:
         parser.error("--seeds must be >= 1 and --first-seed >= 0")
     for n in args.n_uavs:

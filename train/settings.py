@@ -6,7 +6,8 @@ its stable-baselines3 hyperparameters, the schedule (total steps, evaluation, ch
 the seed. The CLI builds it from defaults, then a YAML file (``--config``), then flags, and
 stores the result in the run directory, so ``--config <run>/settings.yaml`` reruns it.
 
-YAML layout (every key optional; see ``train/configs/*.yaml``)::
+YAML layout (every key optional; see ``train/configs/*.yaml``, which ship with the package:
+``--config pair_n20_a50`` names one, :func:`resolve_config`)::
 
     algo: ppo                  # ppo | sac | td3
     preset: paper
@@ -38,6 +39,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from baselines.controllers.zoo import find_packaged, packaged_names
 from baselines.evaluation.specs import parse_assignment
 
 __all__ = [
@@ -45,9 +47,11 @@ __all__ = [
     "DEFAULT_HYPERPARAMETERS",
     "RENAMED_KEYS",
     "RunSettings",
+    "config_names",
     "env_interface_kwargs",
     "load_yaml",
     "parse_assignment",
+    "resolve_config",
     "settings_from_sources",
 ]
 
@@ -319,14 +323,27 @@ def _yaml_loader():
     return Loader
 
 
+def config_names() -> list[str]:
+    """Names of the packaged training configs (``train/configs/*.yaml``), e.g.
+    ``pair_n20_a50``."""
+    return packaged_names("train", "configs", ".yaml")
+
+
+def resolve_config(value: str | Path) -> Path:
+    """The settings file of ``--config VALUE``: a path (``.yaml`` may be left out), or the
+    name of a packaged config (:func:`config_names`) when no such file exists, so that
+    ``--config pair_n20_a50`` works from an installed wheel in any folder
+    (:func:`baselines.controllers.zoo.find_packaged`)."""
+    return find_packaged(value, package="train", folder="configs", suffix=".yaml", what="config")
+
+
 def load_yaml(path: str | Path) -> dict[str, Any]:
-    """A settings mapping from a YAML file (unknown top-level keys raise with suggestions;
-    the old keys ``frame``/``frame_params`` load with a deprecation note)."""
+    """A settings mapping from a YAML file or a packaged config's name
+    (:func:`resolve_config`); unknown top-level keys raise with suggestions, the old keys
+    ``frame``/``frame_params`` load with a deprecation note."""
     import yaml
 
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"--config {str(path)!r} does not exist")
+    path = resolve_config(path)
     with open(path, encoding="utf-8") as f:
         try:
             data = yaml.load(f, Loader=_yaml_loader()) or {}

@@ -4,7 +4,8 @@
   observations), :class:`ZeroPolicy`, :func:`resolve_env`;
 * :mod:`~baselines.controllers.sliding_mode` - eq. 28; :mod:`~baselines.controllers.proportional`
   - eq. 44; :mod:`~baselines.controllers.sb3` - the ``"sb3:<model.zip>"`` loader (SB3/torch,
-  imported only when asked for);
+  imported only when asked for); :mod:`~baselines.controllers.zoo` - the packaged policies
+  (``"sb3:pair_n20_a50"``) and the lookup of packaged files by name;
 * :mod:`~baselines.controllers.registry` - :data:`POLICIES` and :func:`make_pair_policy`.
 
 This layer imports only :mod:`pairflock_env` (never evaluation, reporting or training code).

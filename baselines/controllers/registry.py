@@ -14,7 +14,8 @@ __all__ = ["POLICIES", "make_pair_policy"]
 
 
 def _sb3_policy(path: str, env: Any, **gains: Any) -> Any:
-    """``"sb3:<path>"``: a model saved by ``python -m train`` (imports SB3/torch lazily)."""
+    """``"sb3:<path>"``: a model saved by ``python -m train``, or ``"sb3:<name>"``: a packaged
+    policy (:mod:`baselines.controllers.zoo`); imports SB3/torch lazily."""
     from .sb3 import load_sb3_policy
 
     return load_sb3_policy(path, env, **gains)

@@ -1,6 +1,7 @@
 """A trained stable-baselines3 model in the pair action slot.
 
-``make_pair_policy("sb3:<path>", env)`` loads it.
+``make_pair_policy("sb3:<path>", env)`` loads it; ``"sb3:pair_n20_a50"`` (a bare name) loads a
+policy that ships with the package (:mod:`baselines.controllers.zoo`).
 
 The model was trained on the observation/action of a learning interface
 (:mod:`pairflock_env.learning`, stored in the model file by ``python -m train``); the adapter
@@ -23,6 +24,7 @@ import numpy as np
 from pairflock_env.decision import DecisionHold
 
 from .base import check_observation, resolve_env
+from .zoo import resolve_model
 
 __all__ = ["ALGORITHMS", "METADATA_KEY", "SB3PairPolicy", "load_sb3_policy", "read_metadata"]
 
@@ -40,12 +42,11 @@ def _algo_class(name: str):
 
 
 def read_metadata(path: str | Path) -> dict[str, Any]:
-    """The pairflock metadata stored in a model zip (without building the model)."""
+    """The pairflock metadata stored in a model zip (without building the model); ``path``
+    may name a packaged policy (:func:`~baselines.controllers.zoo.resolve_model`)."""
     from stable_baselines3.common.save_util import load_from_zip_file
 
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"model file {str(path)!r} does not exist")
+    path = resolve_model(path)
     data, _, _ = load_from_zip_file(path, device="cpu", load_data=True)
     meta = (data or {}).get(METADATA_KEY)
     if not isinstance(meta, dict) or "algo" not in meta or "interface" not in meta:
@@ -88,6 +89,8 @@ class SB3PairPolicy:
 
     @classmethod
     def load(cls, path: str | Path, env: Any) -> SB3PairPolicy:
+        """The model saved at ``path`` (or the packaged policy of that name) for ``env``."""
+        path = resolve_model(path)
         meta = read_metadata(path)
         algo = _algo_class(meta["algo"])
         model = algo.load(str(path), device="cpu")
@@ -139,5 +142,8 @@ def load_sb3_policy(path: str, env: Any, **gains: Any) -> SB3PairPolicy:
     if gains:
         raise TypeError(f"an sb3 policy takes no gains, got {sorted(gains)}")
     if not path:
-        raise ValueError("name 'sb3:' needs a model path, e.g. 'sb3:runs/ppo/final_model.zip'")
+        raise ValueError(
+            "name 'sb3:' needs a model path or a packaged model's name, e.g. "
+            "'sb3:runs/ppo/final_model.zip' or 'sb3:pair_n20_a50'"
+        )
     return SB3PairPolicy.load(path, env)
