@@ -83,7 +83,7 @@ class TaskMixVecEnv(VecEnv):
 
     def task_of_row(self, row: int) -> int:
         """The index of the task row ``row`` belongs to."""
-        return int(self._task_of_row[self._locate([row])[0][0]])
+        return self._locate([row])[0][0]
 
     # ------------------------------------------------------------------ seeding/reset
     def seed(self, seed: Any = None) -> Sequence[Any]:
