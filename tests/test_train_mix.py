@@ -307,3 +307,23 @@ def test_two_task_training_logs_every_eval_task_and_keeps_the_best(tmp_path):
     rec = json.loads((tmp_path / "run" / "run.json").read_text())
     assert set(rec["task_configs"]) == {"n6_corners", "n8_random"}
     assert rec["eval_task_configs"]["n10_random"]["horizon"] == 0.3
+
+
+def test_throughput_measures_run_configs_and_estimates_the_run(tmp_path):
+    from train.config_speed import estimate_run_s
+    from train.throughput import main
+
+    cfg = tmp_path / "mix.yaml"
+    cfg.write_text(
+        "env: {pair_accel_limit: 50.0, max_cycles: 100}\neval_env: {horizon: 0.2}\n"
+        "tasks: [{n_uavs: 6, num_swarms: 1}, {n_uavs: 8, init: random, num_swarms: 1}]\n"
+        "eval_seeds: [1000]\neval_baselines: [smc]\ntotal_steps: 1000\neval_every: 300\n"
+        "hyperparameters: {n_steps: 8, batch_size: 16, n_epochs: 1, policy_kwargs: {net_arch: [8]}}\n"
+    )
+    out = tmp_path / "speed.json"
+    assert main(["--config", str(cfg), "--steps", "32", "--repeats", "1", "--out", str(out)]) == 0
+    r = json.loads(out.read_text())["configs"][str(cfg)]
+    assert r["rows"] == 4 and r["median"]["cpu"] > 0 and r["median"]["eval_cpu_s"] > 0
+    s = _settings(total_steps=1000, eval_every=300, eval_baselines=["smc"])
+    # 1000 / rate, plus evaluations at 0, 300, 600, 900 and the final one, plus one baseline
+    assert estimate_run_s(s, 100.0, 2.0) == pytest.approx(10.0 + 6 * 2.0)

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv
 
-from pairflock_env.envs._common import check_policy_actions
+from pairflock_env.core import real_array
 from pairflock_env.seeding import check_seed, spawn
 
 __all__ = ["TaskMixVecEnv", "make_mix_vec_env", "task_seeds"]
@@ -128,7 +128,9 @@ class TaskMixVecEnv(VecEnv):
         """Hand each task env its rows of ``actions`` (num_envs, dim)."""
         # every row is checked before any task env takes its part: a bad action leaves all
         # task envs without a pending step
-        actions = check_policy_actions(actions, (self.num_envs, *self.action_space.shape))
+        actions = real_array(actions, "actions", (self.num_envs, *self.action_space.shape))
+        if not np.isfinite(actions).all():  # finite, but beyond float64 (np.longdouble)
+            raise ValueError("actions are beyond float64's range")
         for env, s in zip(self.envs, self.row_slices, strict=True):
             env.step_async(actions[s])
 
