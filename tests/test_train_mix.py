@@ -318,7 +318,8 @@ def test_throughput_measures_run_configs_and_estimates_the_run(tmp_path):
         "env: {pair_accel_limit: 50.0, max_cycles: 100}\neval_env: {horizon: 0.2}\n"
         "tasks: [{n_uavs: 6, num_swarms: 1}, {n_uavs: 8, init: random, num_swarms: 1}]\n"
         "eval_seeds: [1000]\neval_baselines: [smc]\ntotal_steps: 1000\neval_every: 300\n"
-        "hyperparameters: {n_steps: 8, batch_size: 16, n_epochs: 1, policy_kwargs: {net_arch: [8]}}\n"
+        "hyperparameters: {n_steps: 8, batch_size: 16, n_epochs: 1,"
+        " policy_kwargs: {net_arch: [8]}}\n"
     )
     out = tmp_path / "speed.json"
     assert main(["--config", str(cfg), "--steps", "32", "--repeats", "1", "--out", str(out)]) == 0
