@@ -115,6 +115,17 @@ def test_tasks_resolve_on_the_shared_env_and_single_task_settings_stay_as_they_w
     one = _settings(tasks=None)
     assert not {"tasks", "eval_tasks", "eval_aggregate"} & set(one.to_dict())
     assert training_tasks(one) is None and evaluation_tasks(one)[0].name == ""
+    from train.callbacks import eval_score
+    from train.mix_eval import score_function
+
+    assert score_function(one) is eval_score
+    # one training task, selected on several
+    sel = _settings(
+        tasks=None, env={"n_uavs": 6, "pair_accel_limit": 50.0}, eval_tasks=[{}, TASK_B]
+    )
+    assert training_tasks(sel) is None and score_function(sel) is not eval_score
+    assert [t.name for t in evaluation_tasks(sel)] == ["n6_corners", "n8_random"]
+    assert evaluation_tasks(sel)[1].overrides["max_cycles"] == 30  # the task's own length wins
 
 
 # --------------------------------------------------------------------------- the VecEnv
