@@ -311,3 +311,41 @@ def test_never_reached_band_is_censored_and_marked():
     assert "| default | 1/2 |" in md
     with io.StringIO(md) as f:
         assert "nan" not in f.read()
+
+
+def test_a_sweep_of_a_task_mix_reports_the_aggregate_and_every_task(tmp_path):
+    """Trials of a multi-task config (train/tasks.py): final evaluation and aims per evaluation
+    task plus over every task; the summary has a table per task next to the aggregate."""
+    from train.mix_eval import aggregate_score
+    from train.sweep_plan import SweepPlan
+    from train.sweep_stats import csv_rows, summary_markdown
+    from train.sweep_trial import FINAL_ROWS, run_trial
+
+    base = {
+        "env": {"n_uavs": 8, "pair_accel_limit": 50.0, "max_cycles": 100},
+        "tasks": [{"name": "a", "num_swarms": 1}, {"name": "b", "init": "random", "num_swarms": 1}],
+        "eval_env": {"horizon": 0.3},
+        "eval_seeds": [1000],
+        "eval_baselines": [],
+        "tensorboard": False,
+        "eval_every": 0,
+        "checkpoint_every": 0,
+        "hyperparameters": {"n_steps": 16, "batch_size": 32, "n_epochs": 1},
+    }
+    plan = SweepPlan(base=base, fixed=[], grid=[], seeds=[0, 1], total_steps=64)
+    results = [run_trial(t, tmp_path) for t in plan.trials()]
+    r = results[0]
+    assert r["status"] == "completed" and r["eval_tasks"] == ["a", "b"]
+    assert r["final"]["score"] == aggregate_score(r["final"], ["a", "b"], "worst")
+    names = [a["criterion"] for a in r["aims"]]
+    assert names[0].startswith("a: ") and names[-1].startswith("every task: ")
+    assert len(names) == 3 * len([n for n in names if n.startswith("a: ")])
+    with open(tmp_path / plan.trials()[0].run_dir / FINAL_ROWS, encoding="utf-8") as f:
+        assert [row["task"] for row in csv.DictReader(f)] == ["a", "b"]
+    row = csv_rows(results, [])[0]
+    assert {"final_score", "final_a/ss_error_median", "final_b/score", "aims_met"} <= set(row)
+    md = summary_markdown(results, ["# t"], reps=50, figure=None)
+    assert "## Final model per evaluation task" in md and "| aim | default |" in md
+    for task in ("a", "b"):
+        line = next(x for x in md.splitlines() if x.startswith(f"| default | {task} | 2 |"))
+        assert line.count("[") == 5 and "nan" not in line

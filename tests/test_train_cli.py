@@ -217,11 +217,18 @@ def test_same_seed_same_training_curve_and_evaluation(tmp_path):
     assert _curve(tmp_path / "c") != ca
 
 
-@pytest.mark.parametrize("algo", ["ppo", "sac"])
-def test_resume_continues_exactly(tmp_path, algo):
+#: a run on two tasks (train/tasks.py): 8-UAV corners and 6-UAV random starts
+TWO_TASKS = [{"num_swarms": 1}, {"n_uavs": 6, "init": "random", "max_cycles": 60, "num_swarms": 1}]
+
+
+@pytest.mark.parametrize(
+    "algo, tasks", [("ppo", None), ("sac", None), ("ppo", TWO_TASKS)], ids=["ppo", "sac", "mix"]
+)
+def test_resume_continues_exactly(tmp_path, algo, tasks):
     """A run resumed from a mid-run checkpoint ends bit-identical to the uninterrupted run:
-    step count, parameters, optimizer state and (SAC) replay buffer."""
-    from train.checkpoint import latest_checkpoint
+    step count, parameters, optimizer state and (SAC) replay buffer; also on two tasks, whose
+    task envs are all saved and restored."""
+    from train.checkpoint import latest_checkpoint, load_checkpoint_state
     from train.run import train
 
     total, every = (512, 256) if algo == "ppo" else (192, 96)
@@ -232,6 +239,7 @@ def test_resume_continues_exactly(tmp_path, algo):
         eval_every=0,
         checkpoint_every=every,
         keep_checkpoints=0,
+        **({"tasks": tasks} if tasks else {}),
     )
     full = tmp_path / "full"
     train(s, full, quiet=True)
@@ -246,6 +254,8 @@ def test_resume_continues_exactly(tmp_path, algo):
     assert latest_checkpoint(part).name == mid.name
     if algo == "sac":
         assert (mid / "replay_buffer.pkl").is_file()
+    if tasks:
+        assert len(load_checkpoint_state(mid)["env"]["tasks"]) == 2
     res = train(s, part, resume=part, quiet=True)
     assert res.num_timesteps == total and res.status == "completed"
     _assert_same_params(full / "final_model.zip", part / "final_model.zip")

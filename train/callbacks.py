@@ -168,7 +168,11 @@ class ProgressCallback(BaseCallback):
 class EvalCallback(BaseCallback):
     """Every ``every`` steps: roll out the current policy on the evaluation seeds with the
     baselines' rollout code, log the summary (and the baselines' for comparison) to the SB3
-    logger (TensorBoard, CSV), append to ``history`` and save the best model so far."""
+    logger (TensorBoard, CSV), append to ``history`` and save the best model so far.
+
+    ``score`` turns a summary into the number the best model is kept by (lower is better;
+    default :data:`eval_score`; a run on several tasks passes
+    :func:`train.mix_eval.score_function`)."""
 
     def __init__(
         self,
@@ -179,8 +183,10 @@ class EvalCallback(BaseCallback):
         progress: ProgressCallback | None = None,
         next_eval: int = 0,
         best_score: float = math.inf,
+        score: Callable[[dict[str, float]], float] = eval_score,
     ) -> None:
         super().__init__()
+        self.score = score
         self.evaluate = evaluate
         self.baselines = baselines
         self.every = every
@@ -198,7 +204,7 @@ class EvalCallback(BaseCallback):
 
     def run_now(self) -> dict[str, float]:
         rows, summary = self.evaluate()
-        score = eval_score(summary)
+        score = self.score(summary)
         improved = score < self.best_score
         if improved:
             self.best_score = score

@@ -310,8 +310,11 @@ def _message(result, settings, out) -> str:
     s = result.final_summary
     msg = f"{result.status}: {result.num_timesteps} steps in {result.wall_s / 60:.1f} min -> {out}"
     if s:
+        from .tasks import evaluation_tasks, is_mix
+
+        tasks = f" (worst of {len(evaluation_tasks(settings))} tasks)" if is_mix(settings) else ""
         msg += (
-            f"\nevaluation on seeds {settings.eval_seeds[0]}-{settings.eval_seeds[-1]}: "
+            f"\nevaluation on seeds {settings.eval_seeds[0]}-{settings.eval_seeds[-1]}{tasks}: "
             f"steady error median {s['ss_error_median']:.3f} m, max {s['ss_error_max']:.3f} m; "
             f"in the 0.5 m band for good by {s['band_time_max']:.2f} s; min pair-other "
             f"distance {s['min_separation_min']:.2f} m"

@@ -62,6 +62,10 @@ def make_vec_env(settings: RunSettings, seed_offset: int = 0):
 
     from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
 
+    if settings.tasks is not None:  # a mix: one task env per task, rows concatenated
+        from .mix_env import make_mix_vec_env
+
+        return VecMonitor(make_mix_vec_env(settings, seed_offset))
     ss = np.random.SeedSequence([settings.seed, seed_offset])
     env = PairFlockSB3VecEnv(
         settings.preset,
@@ -113,6 +117,8 @@ class _Session:
     def __init__(self, settings: RunSettings, out: Path, ckpt: Path | None, state, quiet: bool):
         from pairflock_env import make_config
 
+        from .tasks import evaluation_tasks, training_tasks
+
         self.settings, self.out, self.ckpt, self.state, self.quiet = (
             settings,
             out,
@@ -121,8 +127,17 @@ class _Session:
             quiet,
         )
         self.t_start = time.perf_counter()
-        self.cfg = make_config(settings.preset, **settings.config_overrides())
-        self.eval_cfg = make_config(settings.preset, **settings.eval_overrides())
+        tasks = training_tasks(settings)
+        self.task_cfgs = {t.name: t.config(settings.preset) for t in tasks or []}
+        # one task: its config; a mix: the first task's (model metadata, run.json "config")
+        self.cfg = (
+            next(iter(self.task_cfgs.values()))
+            if tasks
+            else make_config(settings.preset, **settings.config_overrides())
+        )
+        #: evaluation configs by task name (one task: the name "")
+        self.eval_cfgs = {t.name: t.config(settings.preset) for t in evaluation_tasks(settings)}
+        self.eval_cfg = next(iter(self.eval_cfgs.values()))
         self.history: list[dict[str, Any]] = list(state["history"]) if state else []
         self.wall_before = float(state.get("wall_s", 0.0)) if state else 0.0
         self.checkpointer = None
@@ -163,28 +178,33 @@ class _Session:
         from baselines import make_pair_policy
         from baselines.evaluation.io import write_json
 
-        from .callbacks import summarize_metrics
+        from .mix_eval import summarize_tasks, tagged_rows
 
         path, s = self.out / "eval_baselines.json", self.settings
         if self.state is not None and path.is_file():
             return json.loads(path.read_text(encoding="utf-8"))["summary"]
         summaries, all_rows = {}, []
         for name in s.eval_baselines:
-            pol = make_pair_policy(name, self.eval_cfg)
-            rows = evaluate_policy_rows(pol, self.eval_cfg, s.eval_seeds)
-            summaries[name] = summarize_metrics(rows)
-            all_rows += [{"policy": name, **r} for r in rows]
+            by_task = {
+                task: evaluate_policy_rows(make_pair_policy(name, cfg), cfg, s.eval_seeds)
+                for task, cfg in self.eval_cfgs.items()
+            }
+            summaries[name] = summarize_tasks(by_task)
+            all_rows += tagged_rows(by_task, policy=name)
         write_json(path, {"seeds": s.eval_seeds, "summary": summaries, "rows": all_rows})
         return summaries
 
     def evaluate(self):
         from baselines.controllers.sb3 import SB3PairPolicy
 
-        from .callbacks import summarize_metrics
+        from .mix_eval import summarize_tasks, tagged_rows
 
-        pol = SB3PairPolicy(self.model, self.eval_cfg, self.interface.to_dict())
-        rows = evaluate_policy_rows(pol, self.eval_cfg, self.settings.eval_seeds)
-        return rows, summarize_metrics(rows)
+        iface, seeds = self.interface.to_dict(), self.settings.eval_seeds
+        by_task = {
+            task: evaluate_policy_rows(SB3PairPolicy(self.model, cfg, iface), cfg, seeds)
+            for task, cfg in self.eval_cfgs.items()
+        }
+        return tagged_rows(by_task), summarize_tasks(by_task)
 
     def on_result(self, step: int, rows, summary, improved: bool) -> None:
         from baselines.evaluation.io import write_csv, write_json
@@ -202,6 +222,7 @@ class _Session:
     # ------------------------------------------------------------------ callbacks
     def make_callbacks(self, baselines: dict[str, dict[str, float]]) -> None:
         from .callbacks import CheckpointCallback, EvalCallback, ProgressCallback
+        from .mix_eval import score_function
 
         s, st = self.settings, self.state
         self.progress = ProgressCallback(s.total_steps, disable=self.quiet)
@@ -214,6 +235,7 @@ class _Session:
             self.progress,
             next_eval=0 if st is None else st["next_eval"],
             best_score=st["best_score"] if st else math.inf,
+            score=score_function(s),
         )
         next_save = s.checkpoint_every if st is None else st["next_checkpoint"]
         self.checkpointer = CheckpointCallback(self.save, s.checkpoint_every, next_save=next_save)
@@ -236,6 +258,14 @@ class _Session:
     def start_record(self) -> None:
         from baselines.evaluation.io import run_record, write_json
 
+        from .tasks import is_mix
+
+        mix = {}
+        if is_mix(self.settings):  # every task's config (the first is "config" too)
+            mix = {
+                "task_configs": {k: c.to_dict() for k, c in self.task_cfgs.items()},
+                "eval_task_configs": {k: c.to_dict() for k, c in self.eval_cfgs.items()},
+            }
         self.record = run_record(
             settings=self.settings.to_dict(),
             config=self.cfg.to_dict(),
@@ -245,6 +275,7 @@ class _Session:
             resumed_from=None if self.state is None else str(self.ckpt),
             start_steps=self.start_steps,
             status="running",
+            **mix,
         )
         resumed = f"run_resumed_{self.start_steps:012d}.json"
         self.record_name = "run.json" if self.state is None else resumed

@@ -18,6 +18,10 @@ YAML layout (every key optional; see ``train/configs/*.yaml``, which ship with t
     interface: pair            # pair | world (the learning interface; old key: frame)
     interface_params: {}       # PairFrameParams fields (old key: frame_params)
     num_swarms: 32
+    tasks:                     # optional: train on a mix (train/tasks.py, docs/learning.md)
+      - {n_uavs: 20, init: corners, num_swarms: 8}
+    eval_tasks: null           # optional: select on a mix (default: the training tasks)
+    eval_aggregate: worst      # worst | sum of the per-task scores
     total_steps: 20000000
     seed: 0
     hyperparameters:           # SB3 constructor keyword arguments for the algorithm
@@ -150,6 +154,9 @@ class RunSettings:
     keep_checkpoints: int = 3
     tensorboard: bool = True
     time_limit: float | None = None
+    tasks: list[dict[str, Any]] | None = None
+    eval_tasks: list[dict[str, Any]] | None = None
+    eval_aggregate: str = "worst"
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> RunSettings:
@@ -214,7 +221,13 @@ class RunSettings:
         return hp
 
     def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
+        """A plain dict of the settings; the task-mix fields only when they are set, so that
+        a run on one task stores exactly what it stored before they existed."""
+        out = dataclasses.asdict(self)
+        for name, default in _MIX_DEFAULTS.items():
+            if out[name] == default:
+                del out[name]
+        return out
 
     # ------------------------------------------------------------------ validation
     def validate(self) -> RunSettings:
@@ -261,11 +274,18 @@ class RunSettings:
                     f"eval_baselines entry {b!r} is invalid: analytic controllers are "
                     f"{', '.join(k for k in POLICIES if not k.endswith(':'))}"
                 )
+        from .tasks import check_tasks
+
+        check_tasks(self)
         _check_hyperparameters(self.algo, self.algo_hyperparameters())
         from .model import resolve_schedules
 
         resolve_schedules(self.algo_hyperparameters())
         return self
+
+
+#: fields of a task mix and their defaults (left out of :meth:`RunSettings.to_dict` when unset)
+_MIX_DEFAULTS = {"tasks": None, "eval_tasks": None, "eval_aggregate": "worst"}
 
 
 def _check_hyperparameters(algo: str, hp: Mapping[str, Any]) -> None:

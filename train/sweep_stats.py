@@ -100,7 +100,7 @@ def _values(results: Sequence[Mapping[str, Any]], part: str, key: str) -> tuple[
     vals, censored = [], 0
     for r in results:
         v = float((r.get(part) or {}).get(key, math.nan))
-        if key in _CENSORED and not math.isfinite(v):
+        if key.rsplit("/", 1)[-1] in _CENSORED and not math.isfinite(v):
             v, censored = float(r["eval_horizon_s"]), censored + 1
         vals.append(v)
     return vals, censored
@@ -113,13 +113,19 @@ def _group(results: Sequence[Mapping[str, Any]]) -> dict[str, list[Mapping[str, 
     return groups
 
 
-def _estimates(groups: Mapping[str, list], reps: int) -> dict[tuple[str, str], list[str]]:
+def _estimates(
+    groups: Mapping[str, list],
+    reps: int,
+    prefix: str = "",
+    parts: Sequence[str] = ("final", "best"),
+) -> dict[tuple[str, str], list[str]]:
     """Table cells ``IQM [low, high]`` per (setting, part), one bootstrap per setting over
-    all its columns (final and best metrics together)."""
+    all its columns (final and best metrics together); ``prefix`` selects an evaluation
+    task's metrics (``<task>/``)."""
     cells: dict[tuple[str, str], list[str]] = {}
     for label, rs in groups.items():
-        parts = [p for p in ("final", "best") if all(r.get(p) for r in rs)]
-        cols = [(p, m, _values(rs, p, m[0])) for p in parts for m in METRICS]
+        have = [p for p in parts if all(r.get(p) for r in rs)]
+        cols = [(p, m, _values(rs, p, prefix + m[0])) for p in have for m in METRICS]
         if not cols:
             continue
         point, lo, hi = iqm_ci(np.array([c[2][0] for c in cols]).T, reps=reps)
@@ -139,20 +145,41 @@ def _metric_table(groups: Mapping[str, list], part: str, cells: Mapping) -> list
     return lines
 
 
-def _aims_table(groups: Mapping[str, list]) -> list[str]:
+def _aims_table(groups: Mapping[str, list], by_row: bool = False) -> list[str]:
+    """Seeds meeting each aim, one row per setting (``by_row``: one row per aim, for the
+    many aims of several evaluation tasks)."""
     names: list[str] = []
     for rs in groups.values():
         for r in rs:
             names += [a["criterion"] for a in r.get("aims", []) if a["criterion"] not in names]
     if not names:
         return ["(no aims were evaluated)"]
-    lines = ["| setting | " + " | ".join(names) + " |", "|" + "---|" * (len(names) + 1)]
+    counts = {}
     for label, rs in groups.items():
-        cells = []
         for n in names:
             met = [a["met"] for r in rs for a in r.get("aims", []) if a["criterion"] == n]
-            cells.append(f"{sum(met)}/{len(met)}" if met else "-")
-        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+            counts[label, n] = f"{sum(met)}/{len(met)}" if met else "-"
+    if by_row:
+        lines = ["| aim | " + " | ".join(groups) + " |", "|" + "---|" * (len(groups) + 1)]
+        return lines + [
+            f"| {n} | " + " | ".join(counts[g, n] for g in groups) + " |" for n in names
+        ]
+    lines = ["| setting | " + " | ".join(names) + " |", "|" + "---|" * (len(names) + 1)]
+    for label in groups:
+        lines.append(f"| {label} | " + " | ".join(counts[label, n] for n in names) + " |")
+    return lines
+
+
+def _task_table(groups: Mapping[str, list], reps: int) -> list[str]:
+    """The final model's metrics per evaluation task: IQM [95 % CI] over seeds."""
+    tasks = list(dict.fromkeys(t for rs in groups.values() for r in rs for t in r["eval_tasks"]))
+    head = "| setting | task | seeds | " + " | ".join(t for _, t, _ in METRICS) + " |"
+    lines = [head, "|" + "---|" * (len(METRICS) + 3)]
+    for task in tasks:
+        cells = _estimates(groups, reps, prefix=f"{task}/", parts=("final",))
+        for label, rs in groups.items():
+            row = cells.get((label, "final"), ["-"] * len(METRICS))
+            lines.append(f"| {label} | {task} | {len(rs)} | " + " | ".join(row) + " |")
     return lines
 
 
@@ -165,9 +192,19 @@ def summary_markdown(
     """The summary: IQM [95 % CI] tables (final and best model) and the aims met."""
     groups = _group(results)
     cells = _estimates(groups, reps)
+    mix = any(r.get("eval_tasks") for r in results)
     lines = [*header, ""]
     lines += ["## Final model: IQM [95 % CI] over seeds", ""]
+    if mix:
+        lines += [
+            "Several evaluation tasks: each metric is the worst task's, the score the run's "
+            "selection score over the tasks (`eval_aggregate`; train/mix_eval.py).",
+            "",
+        ]
     lines += _metric_table(groups, "final", cells)
+    if mix:
+        lines += ["", "## Final model per evaluation task: IQM [95 % CI] over seeds", ""]
+        lines += _task_table(groups, reps)
     lines += ["", "## Best model during training: IQM [95 % CI] over seeds", ""]
     lines += [
         "Picked on the same evaluation seeds it is scored on, so optimistic.",
@@ -175,7 +212,7 @@ def summary_markdown(
         *_metric_table(groups, "best", cells),
     ]
     lines += ["", "## Aims: seeds whose final model meets each", ""]
-    lines += [*_aims_table(groups), ""]
+    lines += [*_aims_table(groups, by_row=mix), ""]
     if figure:
         lines += [f"![validation curves]({figure})", ""]
     lines += [

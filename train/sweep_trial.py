@@ -39,6 +39,7 @@ __all__ = [
     "main",
     "result_scalars",
     "run_trial",
+    "task_aims",
 ]
 
 RESULT_FILE = "sweep_trial.json"
@@ -95,16 +96,20 @@ def _train(trial: Trial, run_dir: Path, settings, interrupt) -> str:
     return res.status
 
 
-def _final_rows(run_dir: Path, settings) -> tuple[list[dict[str, Any]], Any]:
-    """The final model evaluated on each evaluation seed (the rows the aims judge)."""
+def _final_rows(run_dir: Path, settings) -> tuple[dict[str, list[dict[str, Any]]], dict]:
+    """The final model evaluated on each evaluation seed of every evaluation task (the rows
+    the aims judge), and the tasks' configs, both by task name (one task: the name "")."""
     from baselines import make_pair_policy
-    from pairflock_env import make_config
 
     from .run import evaluate_policy_rows
+    from .tasks import evaluation_tasks
 
-    cfg = make_config(settings.preset, **settings.eval_overrides())
-    policy = make_pair_policy(f"sb3:{run_dir / 'final_model.zip'}", cfg)
-    return evaluate_policy_rows(policy, cfg, settings.eval_seeds), cfg
+    rows, cfgs = {}, {}
+    for task in evaluation_tasks(settings):
+        cfg = cfgs[task.name] = task.config(settings.preset)
+        policy = make_pair_policy(f"sb3:{run_dir / 'final_model.zip'}", cfg)
+        rows[task.name] = evaluate_policy_rows(policy, cfg, settings.eval_seeds)
+    return rows, cfgs
 
 
 def aims(rows: list[dict[str, Any]], cfg: Any) -> list[dict[str, Any]]:
@@ -125,6 +130,25 @@ def aims(rows: list[dict[str, Any]], cfg: Any) -> list[dict[str, Any]]:
     return out
 
 
+def task_aims(rows: dict[str, list[dict[str, Any]]], cfgs: dict[str, Any]) -> list[dict]:
+    """:func:`aims` of every evaluation task, named ``<task>: <criterion>``, then
+    ``every task: <criterion>`` (met when every task meets it); one task (the name ""):
+    :func:`aims` of its rows, unchanged."""
+    if list(rows) == [""]:
+        return aims(rows[""], cfgs[""])
+    per = {name: aims(r, cfgs[name]) for name, r in rows.items()}
+    out = [{**a, "criterion": f"{name}: {a['criterion']}"} for name, s in per.items() for a in s]
+    for criterion in dict.fromkeys(a["criterion"] for s in per.values() for a in s):
+        missed = [
+            n for n, s in per.items() for a in s if a["criterion"] == criterion and not a["met"]
+        ]
+        measured = "every task" if not missed else f"missed on {', '.join(missed)}"
+        out.append(
+            {"criterion": f"every task: {criterion}", "met": not missed, "measured": measured}
+        )
+    return out
+
+
 def _read_curve(run_dir: Path) -> list[dict[str, float]]:
     path = run_dir / "eval.csv"
     if not path.is_file():
@@ -140,17 +164,19 @@ def collect(trial: Trial, run_dir: Path, settings) -> dict[str, Any]:
     """The result of a trained trial (see the module docstring)."""
     from baselines.evaluation.io import write_csv
 
+    from .mix_eval import score_function, tagged_rows
+    from .tasks import is_mix
+
     record = _newest_record(run_dir) or {}
     best_path = run_dir / "best_model.json"
     best = json.loads(best_path.read_text(encoding="utf-8")) if best_path.is_file() else {}
-    rows, cfg = _final_rows(run_dir, settings)
-    write_csv(run_dir / FINAL_ROWS, rows)
+    rows, cfgs = _final_rows(run_dir, settings)
+    write_csv(run_dir / FINAL_ROWS, tagged_rows(rows))
     final = dict(record.get("final_summary") or {})
     if final and "score" not in final:
         # the final evaluation's summary carries no score when it ran after the last step
-        from .callbacks import eval_score
-
-        final["score"] = eval_score(final)
+        final["score"] = score_function(settings)(final)
+    tasks = {"eval_tasks": list(rows)} if is_mix(settings) else {}
     return {
         "trial": trial.name,
         "setting": trial.setting,
@@ -163,9 +189,11 @@ def collect(trial: Trial, run_dir: Path, settings) -> dict[str, Any]:
         "final": final,
         "best": best.get("summary", {}),
         "best_step": best.get("step"),
-        "aims": aims(rows, cfg),
+        "aims": task_aims(rows, cfgs),
         "curve": _read_curve(run_dir),
-        "eval_horizon_s": float(cfg.horizon),
+        **tasks,
+        # the longest evaluation episode: what a never-reached band time counts as
+        "eval_horizon_s": max(float(c.horizon) for c in cfgs.values()),
         "wall_train_s": float(record.get("wall_s", 0.0)),
     }
 

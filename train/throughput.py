@@ -2,6 +2,8 @@
 
     python -m train.throughput                       # PPO, N = 20, 16 swarms, 3 repeats
     python -m train.throughput --algo sac --steps 20000 --num-swarms 8
+    python -m train.throughput --config train/configs/pair_mix_a50.yaml \
+        --config train/configs/pair_n20_a50.yaml      # run configs instead (train.config_speed)
 
 Both routes run the same task (the raw world-frame observation, action and reward, since that
 is what the PettingZoo env offers), the same number of rows (swarms x paired UAVs), the same
@@ -11,6 +13,10 @@ second including learning (``model.learn``), after a warm-up; the routes alterna
 ``--repeats`` times and the median is reported. Writes ``--out`` (JSON, with package versions
 and the git commit). Timings on a shared machine are noisy: compare the ratio, and rerun on a
 quiet one for absolute numbers.
+
+With ``--config`` it measures run configs instead (a task mix too): ``model.learn`` of each
+config's own VecEnv and model in CPU and wall time, one evaluation, and an estimate of the
+whole run on one core (:mod:`train.config_speed`); ``--steps`` and ``--repeats`` apply.
 """
 
 from __future__ import annotations
@@ -122,6 +128,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--seed", type=int, default=0, help="seed (default 0)")
     p.add_argument(
+        "--config",
+        type=Path,
+        action="append",
+        default=[],
+        metavar="YAML",
+        help="measure this run config instead of the two routes (repeatable; train.config_speed)",
+    )
+    p.add_argument(
         "--out",
         type=Path,
         default=Path("results/throughput.json"),
@@ -177,6 +191,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     from baselines.evaluation.io import run_record, write_json
 
+    if args.config:
+        return _configs(args)
     hp = _hyperparameters(args)
     overrides = {"n_uavs": args.n_uavs, "pair_accel_limit": 50.0, "max_cycles": 1000}
     results = _measure(args, hp, overrides)
@@ -208,6 +224,29 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"  training steps/s (incl. learning): native {med['native']['learn']:.0f}, "
         f"supersuit {med['supersuit']['learn']:.0f}, ratio {ratio['learn']:.2f}x"
     )
+    print(f"wrote {args.out}")
+    return 0
+
+
+def _configs(args: argparse.Namespace) -> int:
+    """``--config`` mode: the training speed of run configs."""
+    from baselines.evaluation.io import run_record, write_json
+
+    from .config_speed import report, run_configs
+
+    for path in args.config:
+        if not path.is_file():
+            raise SystemExit(f"--config {str(path)!r} does not exist")
+    results = run_configs(args.config, args.steps, args.repeats)
+    record = run_record(
+        steps=args.steps,
+        repeats=args.repeats,
+        configs=results,
+        load_average=list(os.getloadavg()),
+        cpu_count=os.cpu_count(),
+    )
+    write_json(args.out, record)
+    print(report(results, args.steps, args.repeats))
     print(f"wrote {args.out}")
     return 0
 
