@@ -31,10 +31,14 @@ import numpy as np
 __all__ = ["aggregate_score", "score_function", "summarize_tasks", "tagged_rows"]
 
 
-def summarize_tasks(rows_by_task: Mapping[str, list[dict[str, Any]]]) -> dict[str, float]:
+def summarize_tasks(
+    rows_by_task: Mapping[str, list[dict[str, Any]]], targets: Any = None
+) -> dict[str, float]:
     """The evaluation summary of rows per task (see the module docstring); a single task
-    named ``""`` gives :func:`train.callbacks.summarize_metrics` of its rows, unchanged."""
-    from baselines.reporting.criteria import learned_score
+    named ``""`` gives :func:`train.callbacks.summarize_metrics` of its rows, unchanged.
+    ``targets`` (:class:`baselines.reporting.criteria.LearnedTargets`, default ``LEARNED``)
+    give each task's score."""
+    from baselines.reporting.criteria import LEARNED, learned_score
 
     from .callbacks import SUMMARY, summarize_metrics
 
@@ -48,7 +52,7 @@ def summarize_tasks(rows_by_task: Mapping[str, list[dict[str, Any]]]) -> dict[st
     out["band_never"] = float(sum(s["band_never"] for s in per.values()))
     for name, s in per.items():
         out.update({f"{name}/{k}": v for k, v in s.items()})
-        out[f"{name}/score"] = float(learned_score(s))
+        out[f"{name}/score"] = float(learned_score(s, targets or LEARNED))
     return out
 
 
@@ -62,11 +66,16 @@ def aggregate_score(summary: Mapping[str, float], names: list[str], how: str) ->
 def score_function(settings: Any) -> Callable[[Mapping[str, float]], float]:
     """The score a run keeps its best model by: lower is better, 0 when every target is met
     (plus the median error as a tie-breaker)."""
+    from baselines.reporting.criteria import TARGETS, learned_score
+
     from .callbacks import eval_score
     from .tasks import evaluation_tasks, is_mix
 
     if not is_mix(settings):
-        return eval_score
+        if settings.eval_targets == "learned":
+            return eval_score
+        targets = TARGETS[settings.eval_targets]
+        return lambda summary: learned_score(summary, targets)
     names = [t.name for t in evaluation_tasks(settings)]
     how = settings.eval_aggregate
 

@@ -138,6 +138,10 @@ class _Session:
         #: evaluation configs by task name (one task: the name "")
         self.eval_cfgs = {t.name: t.config(settings.preset) for t in evaluation_tasks(settings)}
         self.eval_cfg = next(iter(self.eval_cfgs.values()))
+        from baselines.reporting.criteria import TARGETS
+
+        #: the targets each evaluation task is scored by (the ``eval_targets`` setting)
+        self.targets = TARGETS[settings.eval_targets]
         self.history: list[dict[str, Any]] = list(state["history"]) if state else []
         self.wall_before = float(state.get("wall_s", 0.0)) if state else 0.0
         self.checkpointer = None
@@ -189,7 +193,7 @@ class _Session:
                 task: evaluate_policy_rows(make_pair_policy(name, cfg), cfg, s.eval_seeds)
                 for task, cfg in self.eval_cfgs.items()
             }
-            summaries[name] = summarize_tasks(by_task)
+            summaries[name] = summarize_tasks(by_task, self.targets)
             all_rows += tagged_rows(by_task, policy=name)
         write_json(path, {"seeds": s.eval_seeds, "summary": summaries, "rows": all_rows})
         return summaries
@@ -204,7 +208,7 @@ class _Session:
             task: evaluate_policy_rows(SB3PairPolicy(self.model, cfg, iface), cfg, seeds)
             for task, cfg in self.eval_cfgs.items()
         }
-        return tagged_rows(by_task), summarize_tasks(by_task)
+        return tagged_rows(by_task), summarize_tasks(by_task, self.targets)
 
     def on_result(self, step: int, rows, summary, improved: bool) -> None:
         from baselines.evaluation.io import write_csv, write_json

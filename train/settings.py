@@ -22,6 +22,7 @@ YAML layout (every key optional; see ``train/configs/*.yaml``, which ship with t
       - {n_uavs: 20, init: corners, num_swarms: 8}
     eval_tasks: null           # optional: select on a mix (default: the training tasks)
     eval_aggregate: worst      # worst | sum of the per-task scores
+    eval_targets: learned      # learned | generalist: the targets the best model is kept by
     total_steps: 20000000
     seed: 0
     hyperparameters:           # SB3 constructor keyword arguments for the algorithm
@@ -157,6 +158,7 @@ class RunSettings:
     tasks: list[dict[str, Any]] | None = None
     eval_tasks: list[dict[str, Any]] | None = None
     eval_aggregate: str = "worst"
+    eval_targets: str = "learned"
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> RunSettings:
@@ -285,7 +287,12 @@ class RunSettings:
 
 
 #: fields of a task mix and their defaults (left out of :meth:`RunSettings.to_dict` when unset)
-_MIX_DEFAULTS = {"tasks": None, "eval_tasks": None, "eval_aggregate": "worst"}
+_MIX_DEFAULTS = {
+    "tasks": None,
+    "eval_tasks": None,
+    "eval_aggregate": "worst",
+    "eval_targets": "learned",
+}
 
 
 def _check_hyperparameters(algo: str, hp: Mapping[str, Any]) -> None:

@@ -213,11 +213,19 @@ def _mismatch(where: str, ref_where: str, iface: Any, ref: Any) -> ValueError:
 
 
 def check_tasks(settings: Any) -> None:
-    """Validate ``tasks``, ``eval_tasks`` and ``eval_aggregate`` (TypeError / ValueError
-    naming the task index and key); called by :meth:`RunSettings.validate`."""
+    """Validate ``tasks``, ``eval_tasks``, ``eval_aggregate`` and ``eval_targets``
+    (TypeError / ValueError naming the task index and key); called by
+    :meth:`RunSettings.validate`."""
+    from baselines.reporting.criteria import TARGETS
+
     agg = settings.eval_aggregate
     if agg not in AGGREGATES:
         raise ValueError(f"eval_aggregate={agg!r} is invalid: must be one of {AGGREGATES}")
+    if settings.eval_targets not in TARGETS:
+        raise ValueError(
+            f"eval_targets={settings.eval_targets!r} is invalid: must be one of "
+            f"{', '.join(map(repr, TARGETS))}"
+        )
     if not is_mix(settings):
         return
     train = training_tasks(settings)

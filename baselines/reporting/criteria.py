@@ -5,7 +5,10 @@
 * :data:`QUADROTOR` - the Sec. VI-B experiment (``python -m baselines.quadrotor_experiment
   --check``; docs/quadrotor.md);
 * :data:`LEARNED` - the trained pair policy (``python -m train.evaluate --check``, and the
-  score training keeps its best model by; docs/learning.md).
+  score training keeps its best model by; docs/learning.md);
+* :data:`GENERALIST` - the safe generalist pair policy of docs/safety.md, on every evaluated
+  (N, start) (``python -m train.evaluate --targets generalist --check``; ``eval_targets:
+  generalist`` in a run config selects the best model by them).
 
 A check returns a list of ``(criterion, ok, measured)``; a criterion whose text ends in
 ``(aim)`` is reported (met / missed) but never fails a ``--check``.
@@ -23,15 +26,18 @@ import numpy as np
 from .tables import md_escape, stat_cell
 
 __all__ = [
+    "GENERALIST",
     "LEARNED",
     "PAPER",
     "QUADROTOR",
+    "TARGETS",
     "Check",
     "LearnedTargets",
     "PaperCriteria",
     "QuadrotorCriteria",
     "all_passed",
     "check_learned",
+    "check_learned_all",
     "check_paper_claims",
     "check_quadrotor",
     "criteria_lines",
@@ -70,17 +76,33 @@ class QuadrotorCriteria:
 
 @dataclasses.dataclass(frozen=True)
 class LearnedTargets:
-    """The learned pair policy at N = 20, corners start (distances in m, times in s)."""
+    """Targets of a learned pair policy per (N, start) (distances in m, times in s); the
+    defaults are those of the N = 20, corners policy (:data:`LEARNED`)."""
 
     median_error: float = 0.05  # median over seeds of the steady mean |error|
     max_error: float = 0.1  # no seed's steady mean |error| above this
     band_by: float = 6.0  # in the 0.5 m band for good by this time on every seed
-    min_separation: float = 1.0  # aim: paired UAVs keep this far from every other UAV
+    min_separation: float = 1.0  # paired UAVs keep this far from every other UAV ...
+    separation_is_aim: bool = True  # ... as an aim (reported, never failing a --check)
+    band_median_by: float | None = None  # median band time at most this (None: no target)
+    peak_accel: float | None = None  # m/s^2: peak pair acceleration on every seed (None: none)
 
 
 PAPER = PaperCriteria()
 QUADROTOR = QuadrotorCriteria()
 LEARNED = LearnedTargets()
+#: the safe generalist (docs/safety.md): every N in 20-100, both starts, filter on
+GENERALIST = LearnedTargets(
+    median_error=0.01,
+    max_error=0.05,
+    band_by=6.0,
+    min_separation=1.0,
+    separation_is_aim=False,
+    band_median_by=5.0,
+    peak_accel=50.0,
+)
+#: targets by name (``train.evaluate --targets``, the ``eval_targets`` run setting)
+TARGETS = {"learned": LEARNED, "generalist": GENERALIST}
 
 
 # --------------------------------------------------------------------------- reporting
@@ -262,7 +284,8 @@ def check_learned(
     never = int(np.sum(~np.isfinite(b)))
     band_max = np.nanmax(b) if np.isfinite(b).any() else math.nan
     where = f"N={n_uavs} {init}"
-    return [
+    aim = " (aim)" if t.separation_is_aim else ""
+    out = [
         (
             f"{where}: median steady-state abs error <= {t.median_error:g} m",
             bool(np.median(e) <= t.median_error),
@@ -278,12 +301,41 @@ def check_learned(
             bool(never == 0 and np.all(b <= t.band_by)),
             f"max {band_max:.2f} s" + (f", never on {never} seeds" if never else ""),
         ),
+    ]
+    if t.band_median_by is not None:
+        med = float(np.median(np.where(np.isfinite(b), b, np.inf)))
+        out.append(
+            (
+                f"{where}: median time into the 0.5 m band <= {t.band_median_by:g} s",
+                med <= t.band_median_by,
+                f"{med:.2f} s",
+            )
+        )
+    out.append(
         (
-            f"{where}: min pair-to-other distance >= {t.min_separation:g} m on every seed (aim)",
+            f"{where}: min pair-to-other distance >= {t.min_separation:g} m on every seed{aim}",
             bool(np.all(s >= t.min_separation)),
             f"min {s.min():.2f} m; {int(np.sum(s < t.min_separation))}/{len(s)} seeds below",
-        ),
-    ]
+        )
+    )
+    if t.peak_accel is not None:
+        pk = _values(sel, "peak_accel")
+        out.append(
+            (
+                f"{where}: peak pair acceleration <= {t.peak_accel:g} m/s^2 on every seed",
+                bool(np.all(pk <= t.peak_accel * (1 + 1e-9))),
+                f"max {pk.max():.1f} m/s^2",
+            )
+        )
+    return out
+
+
+def check_learned_all(
+    rows: Sequence[Mapping[str, Any]], targets: LearnedTargets = GENERALIST
+) -> list[Check]:
+    """:func:`check_learned` on every (N, init) the learned rows hold."""
+    keys = dict.fromkeys((r["n_uavs"], r["init"]) for r in rows if r["policy"] == "learned")
+    return [c for n, init in sorted(keys) for c in check_learned(rows, n, init, targets)]
 
 
 #: score of a run that never enters the band (every other term is at most a few units)
@@ -295,7 +347,9 @@ def learned_score(summary: Mapping[str, float], targets: LearnedTargets = LEARNE
 
     ``max(0, median err - 0.05)/0.05 + max(0, max err - 0.1)/0.1 + max(0, band - 6)/6
     + max(0, 1 - min separation)`` plus the median error itself as a tie-breaker, over the
-    summary of :func:`train.callbacks.summarize_metrics`.
+    summary of :func:`train.callbacks.summarize_metrics` (the numbers are those of
+    ``targets``; a median band target and a peak acceleration target add terms of the same
+    form).
     """
     t = targets
     band = summary["band_time_max"]
@@ -303,8 +357,19 @@ def learned_score(summary: Mapping[str, float], targets: LearnedTargets = LEARNE
         band_pen = max(0.0, band - t.band_by) / t.band_by
     else:
         band_pen = NEVER_IN_BAND_PENALTY
+    extra = 0.0
+    if t.band_median_by is not None:
+        med = summary["band_time_median"]
+        extra += (
+            max(0.0, med - t.band_median_by) / t.band_median_by
+            if math.isfinite(med)
+            else NEVER_IN_BAND_PENALTY
+        )
+    if t.peak_accel is not None:
+        extra += max(0.0, summary["peak_accel_max"] - t.peak_accel) / t.peak_accel
     return (
-        max(0.0, summary["ss_error_median"] - t.median_error) / t.median_error
+        extra
+        + max(0.0, summary["ss_error_median"] - t.median_error) / t.median_error
         + max(0.0, summary["ss_error_max"] - t.max_error) / t.max_error
         + band_pen
         + max(0.0, t.min_separation - summary["min_separation_min"])
