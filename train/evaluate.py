@@ -161,6 +161,12 @@ def build_parser() -> argparse.ArgumentParser:
         default=min(2, os.cpu_count() or 1),
         help="worker processes (default 2; 1 runs here)",
     )
+    _add_check_options(p)
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    return p
+
+
+def _add_check_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--check",
         action="store_true",
@@ -173,8 +179,6 @@ def build_parser() -> argparse.ArgumentParser:
         help="learned (default): baselines.reporting.criteria.LEARNED at N=20, corners; "
         "generalist: criteria.GENERALIST on every evaluated N and start",
     )
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
-    return p
 
 
 def _check_args(args: argparse.Namespace, parser: argparse.ArgumentParser) -> dict[str, Any]:
