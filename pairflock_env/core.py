@@ -59,6 +59,7 @@ __all__ = [
     "PairFlockCore",
     "SeedLike",
     "StepResult",
+    "check_count",
     "real_array",
 ]
 
@@ -67,6 +68,14 @@ SeedLike = int | np.random.SeedSequence | None
 #: a diverging swarm overflows on its way out; the step checks its results itself (a swarm
 #: with non-finite values is flagged ``diverged``), so numpy's warnings would only be noise
 _CHECKED_FP = dict(over="ignore", invalid="ignore", divide="ignore")
+
+
+def check_count(name: str, value: Any) -> None:
+    """A count of swarms: ``TypeError`` unless an integer, ``ValueError`` unless >= 1."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name}={value!r} is invalid: must be an integer >= 1")
+    if value < 1:
+        raise ValueError(f"{name}={value!r} is invalid: must be an integer >= 1")
 
 
 class PairFlockCore:
@@ -98,12 +107,7 @@ class PairFlockCore:
             config = config.replace(**overrides)
         if not isinstance(config, PairFlockConfig):
             raise TypeError(f"config={config!r} is invalid: must be a PairFlockConfig")
-        if (
-            isinstance(num_envs, bool)
-            or not isinstance(num_envs, (int, np.integer))
-            or num_envs < 1
-        ):
-            raise ValueError(f"num_envs={num_envs!r} is invalid: must be an integer >= 1")
+        check_count("num_envs", num_envs)
         self.config = cfg = config
         self.num_envs = B = int(num_envs)
         N, D = cfg.n_uavs, cfg.dim

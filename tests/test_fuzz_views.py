@@ -363,11 +363,13 @@ def test_render_before_reset_raises_and_without_a_render_mode_warns(kind):
     frames = render()
     frame = frames if kind in ("parallel", "aec", "gym") else frames[0]
     assert frame.ndim == 3 and frame.dtype == np.uint8
-    plain = make_view(kind)
-    reset_view(plain, kind)
-    if kind == "sb3":
-        with pytest.warns(UserWarning, match="rgb_array"):
-            assert plain.get_images() == [None] * plain.num_envs
-    else:
-        with pytest.warns(UserWarning, match="render_mode"):
-            assert plain.render() is None
+    for reset_first in (False, True):  # without a render_mode: a warning, reset or not
+        plain = make_view(kind)
+        if reset_first:
+            reset_view(plain, kind)
+        if kind == "sb3":
+            with pytest.warns(UserWarning, match="rgb_array"):
+                assert plain.get_images() == [None] * plain.num_envs
+        else:
+            with pytest.warns(UserWarning, match="render_mode"):
+                assert plain.render() is None

@@ -293,9 +293,11 @@ def test_aec_validates_each_action_at_its_own_step(bad, exc):
 
 def test_aec_lifecycle_errors_are_clear():
     e = aec_env(n_uavs=12, max_cycles=1)
-    for call in (lambda: e.step(np.zeros(2)), e.render, e.state, lambda: e.observe("uav_0")):
+    for call in (lambda: e.step(np.zeros(2)), e.state, lambda: e.observe("uav_0")):
         with pytest.raises(RuntimeError, match="reset"):
             call()
+    with pytest.warns(UserWarning, match="render_mode"):  # as in every view (bad-input.md)
+        assert e.render() is None
     e.reset(seed=0)
     e.step(np.zeros(2))
     e.step(np.zeros(2))  # the episode is truncated after one control step

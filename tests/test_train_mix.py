@@ -211,6 +211,27 @@ def test_attributes_state_and_bad_actions_delegate_by_row_range():
         TaskMixVecEnv([_task_env(0, **TASK_A), _task_env(0, n_uavs=6, obs_neighbors=3)])
 
 
+def test_rejected_seeds_and_options_change_no_task_and_name_the_task():
+    from view_helpers import snapshot
+
+    mix, _ = _mix_and_separate()
+    mix.seed(0)
+    mix.reset()
+    a_rows = mix.row_slices[0].stop
+    n, dim = mix.envs[0].config.n_uavs, mix.envs[0].config.dim
+    good = {"positions": np.arange(n * dim, dtype=float).reshape(n, dim) * 3}
+    bad = {"positions": np.full((n, dim), np.nan)}
+    calls = [
+        ("set_options", [good] * a_rows + [bad] * (mix.num_envs - a_rows), ValueError),
+        ("seed", [1] * mix.envs[0].num_swarms + ["x"] * mix.envs[1].num_swarms, TypeError),
+    ]
+    for method, arg, error in calls:
+        before = snapshot(mix.envs)
+        with pytest.raises(error, match=rf"task 1 \({mix.task_names[1]}, rows {a_rows}-"):
+            getattr(mix, method)(arg)
+        assert snapshot(mix.envs) == before, method  # task 0 took nothing either
+
+
 def test_each_task_draws_from_its_own_seed_stream():
     from train.mix_env import TaskMixVecEnv
 

@@ -98,10 +98,7 @@ class TaskMixVecEnv(VecEnv):
             parts = [list(seed[a:b]) for a, b in itertools.pairwise(edges)]
         else:
             parts = task_seeds(seed, self.num_tasks)
-        out: list[Any] = []
-        for env, s in zip(self.envs, parts, strict=True):
-            out += list(env.seed(s))
-        return out
+        return [s for seeds in self._apply_to_tasks("seed", parts) for s in seeds]
 
     def set_options(self, options: dict | list[dict | None] | None = None) -> None:
         """Options for the next ``reset()``: one dict for every row or a list of ``num_envs``,
@@ -114,8 +111,25 @@ class TaskMixVecEnv(VecEnv):
             parts = [options[s] for s in self.row_slices]
         else:
             parts = [options] * self.num_tasks
-        for env, o in zip(self.envs, parts, strict=True):
-            env.set_options(o)
+        self._apply_to_tasks("set_options", parts)
+
+    def _apply_to_tasks(self, method: str, parts: Sequence[Any]) -> list[Any]:
+        """``env.<method>(part)`` on every task env, all or nothing: a task env that rejects
+        its part raises naming the task and its rows, and the pending seeds and options of
+        the task envs before it are put back (SB3 VecEnvs keep them in ``_seeds`` and
+        ``_options``)."""
+        pending = [(list(e._seeds), list(e._options)) for e in self.envs]
+        out = []
+        for k, (env, part) in enumerate(zip(self.envs, parts, strict=True)):
+            try:
+                out.append(getattr(env, method)(part))
+            except (TypeError, ValueError) as err:
+                for e, (seeds, options) in zip(self.envs, pending, strict=True):
+                    e._seeds, e._options = seeds, options
+                rows = self.row_slices[k]
+                where = f"task {k} ({self.task_names[k]}, rows {rows.start}-{rows.stop - 1})"
+                raise type(err)(f"{where}: {err}") from err
+        return out
 
     def reset(self) -> np.ndarray:
         """Reset every task env (with its pending seeds and options); the rows' observations."""

@@ -85,5 +85,7 @@ class PairFlockOrderEnforcing(OrderEnforcingWrapper):
         return super().state()
 
     def render(self):
-        self._require_reset("render")
-        return super().render()
+        # without a render_mode every view warns and returns None, reset or not
+        if self.render_mode is not None:
+            self._require_reset("render")
+        return self.env.render()  # PettingZoo's wrapper would assert a reset first

@@ -23,7 +23,7 @@ except ImportError as e:  # pragma: no cover - depends on the install
     ) from e
 
 from ..config import PairFlockConfig
-from ..core import AGENT_INFO_KEYS, SWARM_INFO_KEYS
+from ..core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, check_count
 from ..seeding import offset_seeds
 from ._common import (
     RENDER_MODES,
@@ -222,6 +222,7 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
         name, params = resolve_interface_args(
             interface, interface_params, frame, frame_params, "pair"
         )
+        check_count("num_swarms", num_swarms)
         self.core, self.interface = build_core_and_interface(
             preset, config, overrides, num_swarms, seed, name, params, render_mode
         )
