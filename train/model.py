@@ -15,11 +15,13 @@ from .settings import RunSettings
 __all__ = [
     "METADATA_KEY",
     "build_model",
+    "init_model_path",
     "linear_schedule",
     "load_model",
     "metadata",
     "resolve_schedules",
     "save_model_atomic",
+    "warm_start",
 ]
 
 
@@ -63,7 +65,38 @@ def build_model(settings: RunSettings, venv: Any) -> Any:
         std = float(hp.pop("action_noise_std"))
         D = venv.action_space.shape[0]
         hp["action_noise"] = NormalActionNoise(np.zeros(D), std * np.ones(D))
-    return cls("MlpPolicy", venv, seed=settings.seed, device="cpu", verbose=0, **hp)
+    model = cls("MlpPolicy", venv, seed=settings.seed, device="cpu", verbose=0, **hp)
+    if settings.init_model is not None:
+        warm_start(model, init_model_path(settings.init_model))
+    return model
+
+
+def init_model_path(value: Any) -> Path:
+    """The model file of the ``init_model`` setting (a zip path or a packaged policy's name);
+    ``TypeError`` / ``ValueError`` naming the setting otherwise."""
+    from baselines.controllers.zoo import resolve_model
+
+    if not isinstance(value, (str, Path)):
+        raise TypeError(f"init_model={value!r} is invalid: must be a path or a model name")
+    try:
+        return resolve_model(value)
+    except FileNotFoundError as e:
+        raise ValueError(f"init_model={value!r} is invalid: {e}") from None
+
+
+def warm_start(model: Any, path: Path) -> None:
+    """Copy the weights (and optimizer state) of the model saved at ``path`` into ``model``;
+    the spaces must be the same (``ValueError`` naming both otherwise)."""
+    from stable_baselines3.common.save_util import load_from_zip_file
+
+    data, params, _ = load_from_zip_file(path, device="cpu")
+    for space in ("observation_space", "action_space"):
+        if data.get(space) != getattr(model, space):
+            raise ValueError(
+                f"init_model={str(path)!r} is invalid: its {space} {data.get(space)} is not "
+                f"the run's {getattr(model, space)}"
+            )
+    model.set_parameters(params, exact_match=True, device="cpu")
 
 
 def load_model(settings: RunSettings, ckpt: Path, venv: Any) -> Any:

@@ -23,6 +23,7 @@ YAML layout (every key optional; see ``train/configs/*.yaml``, which ship with t
     eval_tasks: null           # optional: select on a mix (default: the training tasks)
     eval_aggregate: worst      # worst | sum of the per-task scores
     eval_targets: learned      # learned | generalist: the targets the best model is kept by
+    init_model: null           # optional: start from this model's weights (path or packaged name)
     total_steps: 20000000
     seed: 0
     hyperparameters:           # SB3 constructor keyword arguments for the algorithm
@@ -159,6 +160,7 @@ class RunSettings:
     eval_tasks: list[dict[str, Any]] | None = None
     eval_aggregate: str = "worst"
     eval_targets: str = "learned"
+    init_model: str | None = None
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> RunSettings:
@@ -258,6 +260,10 @@ class RunSettings:
             raise ValueError(
                 f"time_limit={self.time_limit!r} is invalid: must be > 0 minutes or None"
             )
+        if self.init_model is not None:
+            from .model import init_model_path
+
+            init_model_path(self.init_model)
         for name in ("env", "eval_env", "interface_params", "hyperparameters"):
             if not isinstance(getattr(self, name), Mapping):
                 raise TypeError(f"{name}={getattr(self, name)!r} is invalid: must be a mapping")
@@ -292,6 +298,7 @@ _MIX_DEFAULTS = {
     "eval_tasks": None,
     "eval_aggregate": "worst",
     "eval_targets": "learned",
+    "init_model": None,
 }
 
 
