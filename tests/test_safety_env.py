@@ -183,3 +183,27 @@ def test_safety_infos_in_every_view(kind, mode):
         if mode == "none":
             assert not v.any()
     env.close()
+
+
+# --------------------------------------------------------------------------- benchmark
+def test_benchmark_safety_suite_runs_filter_off_and_on(tmp_path):
+    import csv
+    import subprocess
+    import sys
+
+    out = tmp_path / "safety"
+    cmd = [sys.executable, "-m", "baselines.benchmark", "--suite", "safety", "--seeds", "1"]
+    cmd += ["--n-uavs", "20", "--set", "init=corners", "-p", "smc", "--workers", "2"]
+    cmd += ["--no-figures", "--quiet", "--out", str(out)]
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert sorted(r["safety_filter"] for r in rows) == ["cbf", "none"]
+    assert all(r["seed"] == "30000" for r in rows)  # the suite's held-out seeds
+    for r in rows:
+        assert {"closest_pass", "safety_infeasible_steps", "peak_correction"} <= set(r)
+        on = r["safety_filter"] == "cbf"
+        assert (int(r["safety_active_steps"]) > 0) == on
+    summary = (out / "summary.md").read_text()
+    assert "## Safety filter" in summary and "runs >= safety_distance" in summary
+    assert "runs >= safety_distance" in done.stdout
