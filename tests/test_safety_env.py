@@ -29,6 +29,7 @@ def _run(core, policy, steps, seeds):
 def test_config_section_defaults_keep_the_filter_off():
     cfg = make_config("paper")
     assert cfg.safety_filter == "none"
+    assert make_config("paper", safety_filter=None).safety_filter == "none"  # --set ...=none
     sec = cfg.section("safety")
     assert set(sec) >= {"safety_filter", "safety_distance", "safety_sensing_radius"}
     # the filter's parameters follow the config: None means SafetyParams' own defaults

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Mapping
 from typing import Any
 
 from ..fields import Choice, Field, OrNone, Real
@@ -31,6 +33,18 @@ def other_accel(v: Any) -> float:
     return v.safety_other_accel
 
 
+@dataclasses.dataclass(frozen=True)
+class FilterChoice(Choice):
+    """``"none"`` or ``"cbf"``; None means ``"none"`` (what the CLIs' value parser makes of
+    ``--set safety_filter=none``)."""
+
+    def valid(self) -> str:
+        return super().valid() + " (None: 'none')"
+
+    def check(self, name: str, value: Any, ctx: Mapping[str, Any] | None = None) -> str:
+        return "none" if value is None else super().check(name, value, ctx)
+
+
 SAFETY = Section(
     "safety",
     "Safety filter",
@@ -41,7 +55,7 @@ SAFETY = Section(
     (
         Field(
             "safety_filter",
-            Choice(("none", "cbf")),
+            FilterChoice(("none", "cbf")),
             "none",
             "",
             '"none": the pair command is applied as decoded; "cbf": every paired UAV filters '
