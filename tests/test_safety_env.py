@@ -208,3 +208,12 @@ def test_benchmark_safety_suite_runs_filter_off_and_on(tmp_path):
     summary = (out / "summary.md").read_text()
     assert "## Safety filter" in summary and "runs >= safety_distance" in summary
     assert "runs >= safety_distance" in done.stdout
+
+    from baselines.reporting.safety_figure import closest_pass_figure, read_rows
+
+    fig = closest_pass_figure(read_rows([out]), tmp_path / "closest.png")
+    assert fig.stat().st_size > 0
+    with pytest.raises(ValueError, match="no closest_pass"):
+        (tmp_path / "plain").mkdir()
+        (tmp_path / "plain" / "results.csv").write_text("scenario,policy\nx,smc\n")
+        read_rows([tmp_path / "plain"])
