@@ -142,6 +142,9 @@ def test_filtered_command_is_the_applied_one():
         u = core.safety.output.u
         assert np.allclose(res.info["pair_accel"], np.linalg.norm(u, axis=-1), rtol=1e-12)
         assert (np.linalg.norm(u, axis=-1) <= cfg.pair_accel_limit * (1 + 1e-12)).all()
+        # the core's effort term charges the applied (filtered) command
+        effort = -cfg.reward_effort_weight * (u * u).sum(-1) / cfg.pair_accel_limit**2
+        assert np.allclose(res.info["reward_effort"], effort, rtol=1e-12, atol=0)
         changed |= bool(res.info["safety_active"].any())
     assert changed
 
