@@ -5,6 +5,7 @@
     python benchmarks/bench_safety.py --n 50 --b 64
     python benchmarks/bench_safety.py --assumptions   # what the filter's parameters face
     python benchmarks/bench_safety.py --in-step       # the filter's share of a filtered step
+    python benchmarks/bench_safety.py --vecenv        # SB3 VecEnv throughput, filter off/on
 
 Times ``SafetyFilter.apply`` (preallocated outputs) on three states of the paper task with
 ``pair_accel_limit=50`` and compares each with the median time of ``PairFlockCore.step`` at
@@ -31,6 +32,10 @@ and times, in CPU time of this process, every stage of each ``core.step`` (valid
 decode, the safety stage, desired acceleration, vehicle, sweep, observation, the rest of the
 refresh): the medians over steps of each part and of the safety stage's share of the whole
 step, over all steps and over the steps where some agent's filter was active.
+
+``--vecenv`` measures what training sees: the SB3 VecEnv of the learned pair policy's task
+(pair interface, N = 20, 32 swarms, ``pair_accel_limit=50``, ``obs_neighbors=12``) under
+random actions, filter off and on alternately, in agent-steps per CPU second (medians).
 
 Filter and core batches are timed alternately (calibrated batch sizes, one thread); the
 table gives the medians and the median of the per-repeat ratio, the figure to read on a
@@ -205,6 +210,30 @@ def _step_table(rows, active, N, B, limit, steps) -> None:
     print(f"\nsteps with an active filter: {int(active.sum())} of {len(rows)}")
 
 
+def vecenv(repeats: int = 5, steps: int = 200) -> None:
+    """Agent-steps per CPU second of the learning VecEnv, filter off vs on."""
+    from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
+
+    kw = dict(n_uavs=20, pair_accel_limit=50.0, obs_neighbors=12, num_swarms=32)
+    envs = {m: PairFlockSB3VecEnv(safety_filter=m, seed=0, **kw) for m in ("none", "cbf")}
+    rng = np.random.default_rng(0)
+    rates: dict[str, list[float]] = {m: [] for m in envs}
+    for env in envs.values():
+        env.reset()
+    for _ in range(repeats):
+        for m, env in envs.items():
+            acts = rng.uniform(-1, 1, (steps, env.num_envs, env.action_space.shape[0]))
+            t0 = time.process_time()
+            for a in acts:
+                env.step(a)
+            rates[m].append(steps * env.num_envs / (time.process_time() - t0))
+    print(f"\n## SB3 VecEnv, random actions ({kw}; agent-steps per CPU second)\n")
+    print("| safety_filter | agent-steps/s | relative |\n|---|---|---|")
+    base = statistics.median(rates["none"])
+    for m, r in rates.items():
+        print(f"| {m} | {statistics.median(r):,.0f} | {statistics.median(r) / base:.2f} |")
+
+
 def _calls(fn, min_time: float) -> int:
     """Calls of fn per timed batch: doubled until a batch takes min_time (after a warm-up)."""
     fn()
@@ -236,7 +265,11 @@ def main(argv=None) -> None:
         "--in-step", action="store_true", help="time the stages of a filtered core.step"
     )
     ap.add_argument("--steps", type=int, default=400, help="--in-step: control steps")
+    ap.add_argument("--vecenv", action="store_true", help="SB3 VecEnv throughput off vs on")
     args = ap.parse_args(argv)
+    if args.vecenv:
+        vecenv()
+        return
     if args.assumptions:
         assumptions(args.n)
         return
