@@ -50,7 +50,8 @@ class SafetyStage:
         a new array with each agent's filtered command.
 
         Args:
-            q, p: positions and velocities of all UAVs (B, N, dim).
+            q: positions of all UAVs (B, N, dim), m.
+            p: velocities of all UAVs (B, N, dim), m/s.
             flock_acc: the flocking command of every UAV in the current state (B, N, dim);
                 each agent uses its own row only.
             u: the decoded pair command (B, M, dim), m/s^2.
