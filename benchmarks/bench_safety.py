@@ -4,6 +4,8 @@
     python benchmarks/bench_safety.py --quick     # fewer repeats
     python benchmarks/bench_safety.py --n 50 --b 64
     python benchmarks/bench_safety.py --assumptions   # what the filter's parameters face
+    python benchmarks/bench_safety.py --in-step       # the filter's share of a filtered step
+    python benchmarks/bench_safety.py --vecenv        # SB3 VecEnv throughput, filter off/on
 
 Times ``SafetyFilter.apply`` (preallocated outputs) on three states of the paper task with
 ``pair_accel_limit=50`` and compares each with the median time of ``PairFlockCore.step`` at
@@ -24,6 +26,17 @@ cover: the acceleration of unpaired UAVs towards a paired UAV within the sensing
 flocking command (the budget ``accel_limit - brake_accel`` it leaves) and the partners'
 closing speed.
 
+``--in-step`` instead runs the sliding-mode controller with ``safety_filter="cbf"`` in the
+core (N = 100, B = 256 by default) from the reset through the pair's crossing of the swarm
+and times, in CPU time of this process, every stage of each ``core.step`` (validate,
+decode, the safety stage, desired acceleration, vehicle, sweep, observation, the rest of the
+refresh): the medians over steps of each part and of the safety stage's share of the whole
+step, over all steps and over the steps where some agent's filter was active.
+
+``--vecenv`` measures what training sees: the SB3 VecEnv of the learned pair policy's task
+(pair interface, N = 20, 32 swarms, ``pair_accel_limit=50``, ``obs_neighbors=12``) under
+random actions, filter off and on alternately, in agent-steps per CPU second (medians).
+
 Filter and core batches are timed alternately (calibrated batch sizes, one thread); the
 table gives the medians and the median of the per-repeat ratio, the figure to read on a
 shared machine, where absolute times are noisy.
@@ -43,7 +56,7 @@ import time
 
 import numpy as np
 
-from baselines.sliding_mode import SlidingModeController
+from baselines.controllers.sliding_mode import SlidingModeController
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.safety import SafetyFilter, SafetyParams
 
@@ -113,6 +126,114 @@ def assumptions(N: int, seeds: int = 8, radius: float = 20.0) -> None:
         print(f"| {label} | " + " | ".join(f"{x:.1f}" for x in v) + " |")
 
 
+#: the core's stages timed by --in-step: (label, object path, attribute)
+STAGES = (
+    ("1. validate", "", "check_actions"),
+    ("2. decode", "", "decode_actions"),
+    ("2b. safety filter", "safety", "apply"),
+    ("3. desired acceleration", "", "_desired_acceleration"),
+    ("4. vehicle", "vehicle", "advance"),
+    ("5a. flocking + pair sweep", "", "_sweep"),
+    ("5b. observation", "", "_observation"),
+)
+
+
+#: --in-step's clock: this process's CPU time (one thread), which other processes on a
+#: shared machine do not inflate the way they inflate wall time
+_CLOCK = time.process_time
+
+
+def _timed(obj, name: str, acc: dict, label: str) -> None:
+    """Replace obj.name by a wrapper adding its CPU time to acc[label] (this instance)."""
+    fn = getattr(obj, name)
+
+    def wrapper(*a, **kw):
+        t0 = _CLOCK()
+        try:
+            return fn(*a, **kw)
+        finally:
+            acc[label] = acc.get(label, 0.0) + _CLOCK() - t0
+
+    setattr(obj, name, wrapper)
+
+
+def in_step(N: int, B: int, limit: float, steps: int) -> None:
+    """Per-stage times of core.step with the filter on (module docstring)."""
+    cfg = make_config("paper", n_uavs=N, pair_accel_limit=limit, safety_filter="cbf")
+    core = PairFlockCore(cfg, num_envs=B)
+    res = core.reset(seed=0)
+    smc = SlidingModeController(cfg)
+    acc: dict[str, float] = {}
+    for label, path, name in STAGES:
+        _timed(getattr(core, path) if path else core, name, acc, label)
+    rows, active = [], []
+    for _ in range(steps):
+        act, _ = smc.predict(res.obs.reshape(-1, res.obs.shape[-1]))
+        act = act.reshape(B, core.n_agents, cfg.dim)
+        acc.clear()
+        t0 = _CLOCK()
+        res = core.step(act)
+        total = _CLOCK() - t0
+        parts = {label: acc.get(label, 0.0) for label, _, _ in STAGES}
+        parts["5c. rewards, infos, rest"] = total - sum(parts.values())
+        parts["total core.step"] = total
+        rows.append(parts)
+        active.append(bool(res.info["safety_active"].any()))
+    _step_table(rows, np.array(active), N, B, limit, steps)
+
+
+def _step_table(rows, active, N, B, limit, steps) -> None:
+    print(
+        f"\n## Stages of core.step with safety_filter='cbf' (smc, N = {N}, B = {B}, "
+        f"pair_accel_limit = {limit:g}, {steps} steps from the reset; CPU time, medians over "
+        "steps)\n"
+    )
+    sel = {"all steps": np.ones(len(rows), bool), "steps with an active filter": active}
+    print("| stage | " + " | ".join(f"{k} (ms)" for k in sel) + " |")
+    print("|---|" + "---|" * len(sel))
+    for key in rows[0]:
+        cells = [
+            f"{1e3 * statistics.median(r[key] for r, m in zip(rows, mask, strict=True) if m):.3f}"
+            if mask.any()
+            else "-"
+            for mask in sel.values()
+        ]
+        print(f"| {key} | " + " | ".join(cells) + " |")
+    share = [r["2b. safety filter"] / r["total core.step"] for r in rows]
+    cells = [
+        f"{100 * statistics.median(x for x, m in zip(share, mask, strict=True) if m):.1f} %"
+        if mask.any()
+        else "-"
+        for mask in sel.values()
+    ]
+    print("| **safety filter / core.step** | " + " | ".join(cells) + " |")
+    print(f"\nsteps with an active filter: {int(active.sum())} of {len(rows)}")
+
+
+def vecenv(repeats: int = 5, steps: int = 200) -> None:
+    """Agent-steps per CPU second of the learning VecEnv, filter off vs on."""
+    from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
+
+    kw = dict(n_uavs=20, pair_accel_limit=50.0, obs_neighbors=12, num_swarms=32)
+    envs = {m: PairFlockSB3VecEnv(safety_filter=m, seed=0, **kw) for m in ("none", "cbf")}
+    rng = np.random.default_rng(0)
+    rates: dict[str, list[float]] = {m: [] for m in envs}
+    for env in envs.values():
+        env.reset()
+    for _ in range(repeats):
+        for m, env in envs.items():
+            acts = rng.uniform(-1, 1, (steps, env.num_envs, env.action_space.shape[0]))
+            t0 = time.process_time()
+            for a in acts:
+                env.step(a)
+            rates[m].append(steps * env.num_envs / (time.process_time() - t0))
+    print(f"\n## SB3 VecEnv, random actions ({kw}; agent-steps per CPU second)\n")
+    print("| safety_filter | agent-steps/s | relative |\n|---|---|---|")
+    base = statistics.median(rates["none"])
+    for m, r in rates.items():
+        print(f"| {m} | {statistics.median(r):,.0f} | {statistics.median(r) / base:.2f} |")
+
+
 def _calls(fn, min_time: float) -> int:
     """Calls of fn per timed batch: doubled until a batch takes min_time (after a warm-up)."""
     fn()
@@ -140,9 +261,20 @@ def main(argv=None) -> None:
     ap.add_argument("--limit", type=float, default=50.0, help="pair_accel_limit, m/s^2")
     ap.add_argument("--quick", action="store_true", help="fewer repeats")
     ap.add_argument("--assumptions", action="store_true", help="print what the filter faces")
+    ap.add_argument(
+        "--in-step", action="store_true", help="time the stages of a filtered core.step"
+    )
+    ap.add_argument("--steps", type=int, default=400, help="--in-step: control steps")
+    ap.add_argument("--vecenv", action="store_true", help="SB3 VecEnv throughput off vs on")
     args = ap.parse_args(argv)
+    if args.vecenv:
+        vecenv()
+        return
     if args.assumptions:
         assumptions(args.n)
+        return
+    if args.in_step:
+        in_step(args.n, args.b, args.limit, args.steps)
         return
     repeats, min_time = (5, 0.1) if args.quick else (15, 0.3)
     N, B = args.n, args.b

@@ -5,7 +5,9 @@ One control step (:meth:`PairFlockCore.step`), stage by stage:
 1. validate the pair actions (B, M, dim) (M = 2 x pairs; before any state changes):
    :func:`~pairflock_env.actions.check_pair_actions`;
 2. decode: clip to [-1, 1], scale by ``pair_accel_limit`` to m/s^2, giving the pair command
-   u = f^x of every paired UAV (:meth:`PairFlockCore.decode_actions`);
+   u = f^x of every paired UAV (:meth:`PairFlockCore.decode_actions`); with
+   ``safety_filter="cbf"`` each paired UAV then filters its u from what it senses
+   (:class:`~pairflock_env.safety.stage.SafetyStage`, docs/safety.md);
 3. a_des = flocking command of the current state (eqs. 11-19) + u on the paired UAVs
    (+ the random disturbance, when configured);
 4. the vehicle model integrates ``substeps`` physics steps with a_des held;
@@ -44,6 +46,7 @@ from .rewards import (
     reward_terms,
     total_reward,
 )
+from .safety.stage import SafetyStage
 from .seeding import swarm_generators
 from .step_result import (
     AGENT_INFO_KEYS,
@@ -124,6 +127,7 @@ class PairFlockCore:
         self._params = FlockingParams(cfg)
         self._leader = make_leader(cfg)
         self.vehicle = make_vehicle(cfg, B)
+        self.safety = SafetyStage(cfg, self.agent_uavs, B)  # stage 2b (safety_filter)
         self.q = np.zeros((B, N, D))
         self.p = np.zeros((B, N, D))
         self.t = np.zeros(B)
@@ -275,13 +279,14 @@ class PairFlockCore:
         Swarms whose episode has ended keep integrating; views reset them.
 
         Decoding (stage 2) and the desired acceleration (stage 3) are separate on purpose:
-        a stage that adjusts the decoded pair command u from what each UAV senses (a
-        safety filter) belongs between them; the sweeps of the current state it needs are
-        the ones the previous step (or the reset) made.
+        the safety filter (stage 2b, :attr:`safety`) adjusts the decoded pair command u
+        from what each UAV senses, using the sweep of the current state that the previous
+        step (or the reset) made.
         """
         self._require_reset()
         a = self.check_actions(actions)  # 1. validate (raises before any state change)
         u, clipped = self.decode_actions(a)  # 2. decode: the pair command u, m/s^2
+        u = self.safety.apply(self.q, self.p, self._flock_out["acc"], u)  # 2b. safety filter
         with np.errstate(**_CHECKED_FP):
             a_des = self._desired_acceleration(u)  # 3. flocking + pair term (+ disturbance)
             self.vehicle.advance(self.q, self.p, a_des)  # 4. the vehicle model tracks a_des
@@ -325,7 +330,8 @@ class PairFlockCore:
         if self._check_finite:  # an extreme config: what overflows still ends as a divergence
             finite = np.isfinite(reward) & np.isfinite(pair["sliding_surface"])
             diverged |= ~finite.all(axis=1)
-        info = make_info(pair, fl, u, clipped, self.t, diverged, terms)
+        safety = self.safety.info(reset=reset_rows is not None)
+        info = make_info(pair, fl, u, clipped, self.t, diverged, terms, safety)
         if diverged.any():  # a diverged swarm keeps its last finite observation and infos
             obs[diverged] = self._obs[diverged]
             hold_last_finite(info, self._info, diverged)

@@ -63,7 +63,11 @@ by every view and by the loader, so training and evaluation cannot drift apart):
     to an observed neighbour within ``approach_horizon`` at constant velocities, so that a
     collision course costs before the UAVs are close (at 50 m/s a close pass lasts a few
     hundredths of a second, its warning half a second; a predicted collision is charged as
-    one). The cohesion term keeps the pair in the flock:
+    one). ``a`` in the effort term is the network's own action, also with
+    ``safety_filter="cbf"``: the policy is charged for what it asks, not for the filter's
+    correction, which it does not choose (the core's reward, the world interface and the
+    ``pair_accel`` info use the applied, filtered command; ``safety_correction`` reports the
+    change). The cohesion term keeps the pair in the flock:
     nothing in the pair task itself stops both members from fleeing the swarm together, an
     escape route from the separation penalty that an early policy found. A diverged swarm
     gets the core's ``-DIVERGENCE_PENALTY``.

@@ -8,7 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["METRIC_DOCS", "pair_episode_metrics", "settle_time"]
+__all__ = [
+    "METRIC_DOCS",
+    "SAFETY_METRIC_DOCS",
+    "pair_episode_metrics",
+    "pair_safety_metrics",
+    "settle_time",
+]
 
 #: name -> (unit, meaning) of every metric returned by :func:`pair_episode_metrics`
 METRIC_DOCS: dict[str, tuple[str, str]] = {
@@ -29,6 +35,47 @@ METRIC_DOCS: dict[str, tuple[str, str]] = {
     "final_velocity_mismatch": ("m/s", "mean ||p_i - p_leader|| of unpaired UAVs at the end"),
     "max_collisions": ("pairs", "most UAV pairs closer than collision_distance at one time"),
 }
+
+
+#: name -> (unit, meaning) of the safety filter's metrics (:func:`pair_safety_metrics`)
+SAFETY_METRIC_DOCS: dict[str, tuple[str, str]] = {
+    "closest_pass": (
+        "m",
+        "smallest distance from a paired UAV to any other UAV, its partner included",
+    ),
+    "closest_pass_ok": ("0/1", "1 if closest_pass >= safety_distance"),
+    "safety_active_steps": ("steps", "agent-steps the filter changed a command for safety"),
+    "safety_infeasible_steps": (
+        "steps",
+        "agent-steps no command within the bound met every constraint",
+    ),
+    "peak_correction": ("m/s^2", "largest ||u - u_nom|| the filter applied to either member"),
+}
+
+
+def pair_safety_metrics(
+    min_separation: np.ndarray,
+    pair_distance: np.ndarray,
+    active_steps: np.ndarray,
+    infeasible_steps: np.ndarray,
+    peak_correction: np.ndarray,
+    safety_distance: float,
+) -> dict[str, float]:
+    """Safety metrics of one pair over one episode (:data:`SAFETY_METRIC_DOCS`).
+
+    Args:
+        min_separation: nearest non-partner distance of each member (2, T).
+        pair_distance: ||y|| (T,).  active_steps, infeasible_steps, peak_correction: (2,)
+            per member over the episode.  safety_distance: D_s (m).
+    """
+    closest = float(min(np.min(min_separation), np.min(pair_distance)))
+    return {
+        "closest_pass": closest,
+        "closest_pass_ok": int(closest >= safety_distance),
+        "safety_active_steps": int(np.sum(active_steps)),
+        "safety_infeasible_steps": int(np.sum(infeasible_steps)),
+        "peak_correction": float(np.max(peak_correction)),
+    }
 
 
 def settle_time(t: np.ndarray, inside: np.ndarray) -> float:

@@ -36,6 +36,9 @@ AGENT_INFO_KEYS = (
     "shared_neighbors",
     "pair_accel",
     "action_clipped",
+    "safety_active",
+    "safety_correction",
+    "safety_infeasible",
 )
 #: per-swarm info arrays, shape (B,)
 SWARM_INFO_KEYS = (
@@ -48,7 +51,15 @@ SWARM_INFO_KEYS = (
 )
 #: infos that describe the step itself (clock, applied command, flag), not the state: always
 #: current, also for a diverged swarm
-LIVE_INFO_KEYS = ("pair_accel", "action_clipped", "sim_time", "diverged")
+LIVE_INFO_KEYS = (
+    "pair_accel",
+    "action_clipped",
+    "safety_active",
+    "safety_correction",
+    "safety_infeasible",
+    "sim_time",
+    "diverged",
+)
 
 
 @dataclasses.dataclass
@@ -79,6 +90,7 @@ def make_info(
     sim_time: np.ndarray,
     diverged: np.ndarray,
     terms: Mapping[str, np.ndarray],
+    safety: Mapping[str, np.ndarray] | None = None,
 ) -> dict[str, np.ndarray]:
     """The core's infos of one step (fresh arrays; see the module docstring).
 
@@ -89,10 +101,14 @@ def make_info(
             ``velocity_mismatch``, ``velocity_mismatch_max``, (B,)); copied.
         u: the applied pair command (B, M, dim), m/s^2; clipped: (B, M) bool.
         sim_time: (B,) s (copied); diverged: (B,) bool; terms: reward terms (B, M).
+        safety: the safety stage's ``safety_active``, ``safety_correction`` and
+            ``safety_infeasible`` (B, M); zeros / False when None (no filter).
     """
     info = {k: pair[k] for k in AGENT_INFO_KEYS[:5]}
     info["pair_accel"] = np.sqrt(np.einsum("bmk,bmk->bm", u, u))
     info["action_clipped"] = clipped
+    for k, dtype in zip(AGENT_INFO_KEYS[7:], (bool, np.float64, bool), strict=True):
+        info[k] = np.zeros(clipped.shape, dtype) if safety is None else safety[k]
     info["sim_time"] = sim_time.copy()
     for k in SWARM_INFO_KEYS[1:5]:
         info[k] = flock[k].copy()

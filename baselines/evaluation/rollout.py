@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from pairflock_env import PairFlockConfig, PairFlockCore
-from pairflock_env.metrics import pair_episode_metrics
+from pairflock_env.metrics import pair_episode_metrics, pair_safety_metrics
 
 __all__ = ["Trace", "rollout", "trace_metrics"]
 
@@ -37,6 +37,9 @@ class Trace:
     velocity_mismatch: np.ndarray  # (B, T+1)
     collisions: np.ndarray  # (B, T+1)
     clipped_steps: np.ndarray  # (B, M)
+    safety_active_steps: np.ndarray  # (B, M) steps the safety filter changed the command
+    safety_infeasible_steps: np.ndarray  # (B, M)
+    peak_correction: np.ndarray  # (B, M) largest ||u - u_nom||, m/s^2
     ended: np.ndarray  # (B,) control steps actually run (early termination < T)
     positions: dict[int, np.ndarray]  # row -> (T+1, N, dim), only for recorded rows
     velocities: dict[int, np.ndarray]
@@ -63,6 +66,9 @@ def _empty_trace(config: PairFlockConfig, seeds: list[int], M: int, T: int, reco
         velocity_mismatch=np.empty((B, T + 1)),
         collisions=np.empty((B, T + 1), np.int64),
         clipped_steps=np.zeros((B, M), np.int64),
+        safety_active_steps=np.zeros((B, M), np.int64),
+        safety_infeasible_steps=np.zeros((B, M), np.int64),
+        peak_correction=np.zeros((B, M)),
         ended=np.full(B, T, np.int64),
         positions={int(r): np.empty((T + 1, config.n_uavs, D)) for r in record_rows},
         velocities={int(r): np.empty((T + 1, config.n_uavs, D)) for r in record_rows},
@@ -92,6 +98,16 @@ def _record(tr: Trace, core: PairFlockCore, k: int, res, live: np.ndarray) -> No
                 tr.positions[r][k] = core.q[r]
                 tr.velocities[r][k] = core.p[r]
                 tr.leader_positions[r][k] = lq[r]
+
+
+def _record_safety(tr: Trace, info, live: np.ndarray) -> None:
+    tr.safety_active_steps[live] += info["safety_active"][live]
+    tr.safety_infeasible_steps[live] += info["safety_infeasible"][live]
+    np.maximum(
+        tr.peak_correction,
+        np.where(live[:, None], info["safety_correction"], 0.0),
+        out=tr.peak_correction,
+    )
 
 
 def _freeze_finished(tr: Trace, T: int) -> None:
@@ -167,7 +183,11 @@ def rollout(
         actions = np.asarray(actions, dtype=np.float64).reshape(B, M, D)
         res = core.step(actions)
         live = ~done
-        tr.u[live, :, k - 1] = np.clip(actions[live], -1.0, 1.0) * limit
+        if core.safety.enabled:  # the applied command is the filtered one
+            tr.u[live, :, k - 1] = core.safety.output.u[live]
+            _record_safety(tr, res.info, live)
+        else:
+            tr.u[live, :, k - 1] = np.clip(actions[live], -1.0, 1.0) * limit
         tr.clipped_steps[live] += res.info["action_clipped"][live]
         _record(tr, core, k, res, live)
         if on_step is not None:
@@ -184,9 +204,16 @@ def rollout(
     return tr
 
 
-def trace_metrics(tr: Trace, **kwargs: Any) -> list[dict[str, Any]]:
-    """Metrics of every (swarm, pair) of a trace, one dict each (with ``seed`` and ``pair``)."""
+def trace_metrics(tr: Trace, *, safety_metrics: bool | None = None, **kwargs: Any):
+    """Metrics of every (swarm, pair) of a trace, one dict each (with ``seed`` and ``pair``).
+
+    ``safety_metrics`` adds the columns of :data:`~pairflock_env.metrics.SAFETY_METRIC_DOCS`
+    (default: when the trace's config has ``safety_filter`` on; pass True for the same columns
+    in every run of a comparison with the filter off and on). ``kwargs`` go to
+    :func:`~pairflock_env.metrics.pair_episode_metrics`."""
     cfg = tr.config
+    if safety_metrics is None:
+        safety_metrics = cfg.safety_filter != "none"
     out = []
     for b in range(tr.num_swarms):
         for k in range(tr.pair_error.shape[1]):
@@ -205,6 +232,17 @@ def trace_metrics(tr: Trace, **kwargs: Any) -> list[dict[str, Any]]:
                 cfg.collision_distance,
                 **kwargs,
             )
+            if safety_metrics:
+                m.update(
+                    pair_safety_metrics(
+                        tr.min_separation[b, ms],
+                        tr.pair_distance[b, k],
+                        tr.safety_active_steps[b, ms],
+                        tr.safety_infeasible_steps[b, ms],
+                        tr.peak_correction[b, ms],
+                        cfg.safety_distance,
+                    )
+                )
             m = {
                 "seed": tr.seeds[b],
                 "pair": k,

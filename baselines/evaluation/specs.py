@@ -49,6 +49,7 @@ SHORT_NAMES = {
     "obs_noise_velocity": "noise y' (m/s)",
     "partner_delay": "delay (steps)",
     "disturbance_std": "disturbance (m/s^2)",
+    "safety_filter": "filter",
 }
 
 

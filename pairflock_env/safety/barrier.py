@@ -25,6 +25,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import numpy.typing as npt
 
 from ._kernels import _filter_kernel
 from .params import SafetyParams
@@ -82,7 +83,7 @@ class SafetyFilter:
     own bound.
     """
 
-    def __init__(self, params: SafetyParams, agents, n_uavs: int) -> None:
+    def __init__(self, params: SafetyParams, agents: npt.ArrayLike, n_uavs: int) -> None:
         if not isinstance(params, SafetyParams):
             raise TypeError(f"params={params!r} is invalid: must be a SafetyParams")
         if isinstance(n_uavs, bool) or not isinstance(n_uavs, (int, np.integer)) or n_uavs < 1:
@@ -115,11 +116,19 @@ class SafetyFilter:
         """Output arrays for ``num_envs`` swarms in ``dim`` dimensions."""
         return SafetyOutput.empty(int(num_envs), self.agents.size, int(dim))
 
-    def apply(self, q, p, flock_accel, u_nom, out: SafetyOutput | None = None) -> SafetyOutput:
+    def apply(
+        self,
+        q: npt.ArrayLike,
+        p: npt.ArrayLike,
+        flock_accel: npt.ArrayLike,
+        u_nom: npt.ArrayLike,
+        out: SafetyOutput | None = None,
+    ) -> SafetyOutput:
         """Filter the nominal pair commands of every agent of every swarm.
 
         Args:
-            q, p: positions (m) and velocities (m/s) of all UAVs, (B, N, dim).
+            q: positions of all UAVs (B, N, dim), m.
+            p: velocities of all UAVs (B, N, dim), m/s.
             flock_accel: (B, M, dim) each agent's own flocking command f_i, m/s^2.
             u_nom: (B, M, dim) nominal pair commands, m/s^2 (finite).
             out: arrays to fill (from :meth:`allocate`); new ones when None.

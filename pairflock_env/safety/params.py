@@ -104,14 +104,21 @@ class SafetyParams:
 
     @classmethod
     def from_config(cls, config: Any, **overrides: Any) -> SafetyParams:
-        """Parameters for an env config: ``accel_limit = pair_accel_limit`` and the config's
-        ``dt``, ``substeps``, ``integrator``; keyword ``overrides`` replace any field."""
+        """Parameters for an env config: ``accel_limit = pair_accel_limit``, the config's
+        ``dt``, ``substeps``, ``integrator`` and its ``safety_*`` fields (section ``safety``:
+        ``safety_distance``, ``safety_brake_accel``, ``safety_other_accel``,
+        ``safety_sensing_radius``, ``safety_decay``); keyword ``overrides`` replace any
+        field."""
         kw = dict(
             accel_limit=config.pair_accel_limit,
             dt=config.dt,
             substeps=config.substeps,
             integrator=config.integrator,
         )
+        for name in ("safety_distance", "brake_accel", "other_accel", "sensing_radius", "decay"):
+            key = name if name == "safety_distance" else f"safety_{name}"
+            if hasattr(config, key):
+                kw[name] = getattr(config, key)
         names = {f.name for f in dataclasses.fields(cls)}
         unknown = sorted(set(overrides) - names)
         if unknown:

@@ -67,8 +67,8 @@ def _seed_and_execution_options(p: argparse.ArgumentParser) -> None:
     sd.add_argument(
         "--first-seed",
         type=int,
-        default=0,
-        help="seeds are first-seed, first-seed + 1, ... (default: 0)",
+        default=None,
+        help="seeds are first-seed, first-seed + 1, ... (default: the suite's, mostly 0)",
     )
     sd.add_argument(
         "--steady-window",
@@ -257,9 +257,10 @@ def _policies_and_seeds(args, suite: Suite, parser):
     n_seeds = suite.seeds if args.seeds is None else args.seeds
     if n_seeds < 1:
         parser.error(f"--seeds {n_seeds} is invalid: must be >= 1")
-    if args.first_seed < 0:
-        parser.error(f"--first-seed {args.first_seed} is invalid: must be >= 0")
-    return specs, list(range(args.first_seed, args.first_seed + n_seeds))
+    first = suite.first_seed if args.first_seed is None else args.first_seed
+    if first < 0:
+        parser.error(f"--first-seed {first} is invalid: must be >= 0")
+    return specs, list(range(first, first + n_seeds))
 
 
 def _scenarios(args, suite: Suite, preset: str, grid, parser):
@@ -335,6 +336,17 @@ def _video_target(args, specs, scenarios, parser) -> tuple[int, int] | None:
     return i, j
 
 
+def _metric_kwargs(args: argparse.Namespace, configs) -> dict[str, Any]:
+    """Options of the episode metrics: the steady window, and the safety columns in every
+    run as soon as one scenario has the safety filter on (so that off and on compare)."""
+    kw: dict[str, Any] = {}
+    if args.steady_window is not None:
+        kw["steady_window"] = args.steady_window
+    if any(c.safety_filter != "none" for c in configs):
+        kw["safety_metrics"] = True
+    return kw
+
+
 def resolve(args: argparse.Namespace, parser: argparse.ArgumentParser) -> Plan:
     """Suite defaults + options -> :class:`Plan`; any bad option ends in ``parser.error``."""
     from pairflock_env import preset_names
@@ -369,7 +381,7 @@ def resolve(args: argparse.Namespace, parser: argparse.ArgumentParser) -> Plan:
         keys=_table_keys(grid, suite, listed),
         video=_video_target(args, specs, scenarios, parser),
         out=args.out or Path("results") / "benchmark" / args.suite,
-        metric_kwargs={} if args.steady_window is None else {"steady_window": args.steady_window},
+        metric_kwargs=_metric_kwargs(args, configs),
         figures=not args.no_figures,
         snapshots=suite.snapshots and not args.no_snapshots,
     )

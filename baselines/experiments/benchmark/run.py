@@ -114,7 +114,8 @@ def _records(plan: Plan) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
 
 def _write_results(out: Path, plan: Plan, res: Results, sc_records, pol_records) -> None:
     from baselines.evaluation.io import atomic_write_text, dumps_stable, json_rows, write_csv
-    from pairflock_env.metrics import METRIC_DOCS
+    from baselines.reporting.safety_table import has_safety_columns
+    from pairflock_env.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
 
     metric_cols = [k for k in res.rows[0] if k not in res.columns and k != "policy"]
     write_csv(out / "results.csv", res.rows, [*res.columns, "policy", *metric_cols])
@@ -124,7 +125,13 @@ def _write_results(out: Path, plan: Plan, res: Results, sc_records, pol_records)
         "seeds": plan.seeds,
         "scenarios": sc_records,
         "policies": pol_records,
-        "metrics": {k: list(v) for k, v in METRIC_DOCS.items()},
+        "metrics": {
+            k: list(v)
+            for k, v in {
+                **METRIC_DOCS,
+                **(SAFETY_METRIC_DOCS if has_safety_columns(res.rows) else {}),
+            }.items()
+        },
         "snapshots": plan.snapshots,
         "runs": json_rows(res.rows),
     }
@@ -263,6 +270,7 @@ def replot(args, parser) -> int:
 def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
     """The benchmark CLI (``python -m baselines.benchmark``); returns the exit status."""
     from baselines.reporting.criteria import all_passed, criteria_lines
+    from baselines.reporting.safety_table import has_safety_columns, safety_table
     from baselines.reporting.tables import ACCURACY_METRICS, summary_table
 
     parser = build_parser(prog)
@@ -275,6 +283,8 @@ def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
     res = simulate(plan, args)
     checks, fig_paths, video_path, total_s = _write_all(plan, res, args, t0)
     print(summary_table(res.rows, ACCURACY_METRICS, plan.keys))
+    if has_safety_columns(res.rows):
+        print("\n" + safety_table(res.rows, plan.keys))
     for line in criteria_lines(checks):
         print(line)
     print(

@@ -21,6 +21,7 @@ class Suite:
     scenarios: tuple[tuple[str, tuple[tuple[str, Any], ...]], ...] = ()
     check: bool = False
     snapshots: bool = True
+    first_seed: int = 0
 
 
 SUITES: dict[str, Suite] = {
@@ -63,6 +64,21 @@ SUITES: dict[str, Suite] = {
         policies=("smc", "proportional"),
         seeds=3,
         base=(("n_uavs", 20), ("horizon", 15.0)),
+    ),
+    "safety": Suite(
+        "the CBF safety filter off vs on: N = 20/50/100 x corners/random starts x smc, "
+        "proportional, learned (sb3:pair_n20_a50), 100 held-out seeds 30000-30099",
+        preset="paper",
+        policies=("smc", "proportional", "sb3:pair_n20_a50"),
+        seeds=100,
+        first_seed=30000,
+        base=(("obs_neighbors", 12),),  # what the learned policy observes
+        grid=(
+            ("n_uavs", (20, 50, 100)),
+            ("init", ("corners", "random")),
+            ("safety_filter", ("none", "cbf")),
+        ),
+        snapshots=False,
     ),
     "quadrotor": Suite(
         "Sec. VI-B: 10 quadrotors (preset 'paper-quadrotor', docs/quadrotor.md), 5 seeds",

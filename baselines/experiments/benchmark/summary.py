@@ -8,7 +8,8 @@ from typing import Any
 
 from baselines.reporting import tables
 from baselines.reporting.criteria import Check, criteria_table
-from pairflock_env.metrics import METRIC_DOCS
+from baselines.reporting.safety_table import has_safety_columns, safety_table
+from pairflock_env.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
 
 __all__ = ["summary_markdown"]
 
@@ -73,10 +74,22 @@ def summary_markdown(
 ) -> str:
     """The text of ``summary.md`` for a run of ``plan`` (a benchmark ``Plan``)."""
     md = _intro(plan) + _tables(plan, rows)
+    docs = dict(METRIC_DOCS)
+    if has_safety_columns(rows):
+        md += [
+            "## Safety filter",
+            "",
+            "Per policy and scenario over runs: median / worst; closest pass includes the "
+            "partner; infeasible agent-steps summed over runs (runs with any).",
+            "",
+            safety_table(rows, plan.keys),
+            "",
+        ]
+        docs.update(SAFETY_METRIC_DOCS)
     if checks:
         md += ["## Acceptance criteria (paper)", "", *criteria_table(checks), ""]
     md += ["## Metrics", "", "| column | unit | meaning |", "|---|---|---|"]
-    md += [f"| `{k}` | {u} | {tables.md_escape(m)} |" for k, (u, m) in METRIC_DOCS.items()]
+    md += [f"| `{k}` | {u} | {tables.md_escape(m)} |" for k, (u, m) in docs.items()]
     if fig_paths:
         md += ["", "## Figures", ""]
         md += [f"- `{p.relative_to(plan.out)}`" for p in fig_paths]

@@ -6,11 +6,11 @@ derived quantities are checked as soon as their fields are.
 
 from __future__ import annotations
 
-from . import flocking, leader, pairs, quadrotor, reward, sensing, swarm
+from . import flocking, leader, pairs, quadrotor, reward, safety, sensing, swarm
 
 __all__ = ["DERIVED", "RULES", "SECTIONS"]
 
-_MODULES = (swarm, flocking, leader, pairs, reward, sensing, quadrotor)
+_MODULES = (swarm, flocking, leader, pairs, reward, sensing, quadrotor, safety)
 
 SECTIONS = tuple(s for m in _MODULES for s in m.SECTIONS)
 RULES = tuple(r for m in _MODULES for r in getattr(m, "RULES", ()))

@@ -1,0 +1,150 @@
+"""Section ``safety``: the optional CBF safety filter on the paired UAVs' commands
+(:mod:`pairflock_env.safety`, docs/safety.md)."""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from typing import Any
+
+from ..fields import Choice, Field, OrNone, Real
+from ..limits import MAX_DISTANCE, MAX_GAIN
+from ..schema import Rule, Section
+
+__all__ = ["RULES", "SECTIONS", "brake_accel", "other_accel"]
+
+#: share of ``pair_accel_limit`` a paired UAV counts on for braking when unset
+BRAKE_SHARE = 0.5
+#: share of ``pair_accel_limit`` assumed for unpaired UAVs' acceleration when unset
+OTHER_SHARE = 0.1
+
+
+def brake_accel(v: Any) -> float:
+    """alpha (m/s^2): ``safety_brake_accel``, or ``BRAKE_SHARE x pair_accel_limit``."""
+    if v.safety_brake_accel is None:
+        return BRAKE_SHARE * v.pair_accel_limit
+    return v.safety_brake_accel
+
+
+def other_accel(v: Any) -> float:
+    """A_o (m/s^2): ``safety_other_accel``, or ``OTHER_SHARE x pair_accel_limit``."""
+    if v.safety_other_accel is None:
+        return OTHER_SHARE * v.pair_accel_limit
+    return v.safety_other_accel
+
+
+@dataclasses.dataclass(frozen=True)
+class FilterChoice(Choice):
+    """``"none"`` or ``"cbf"``; None means ``"none"`` (what the CLIs' value parser makes of
+    ``--set safety_filter=none``)."""
+
+    def valid(self) -> str:
+        return super().valid() + " (None: 'none')"
+
+    def check(self, name: str, value: Any, ctx: Mapping[str, Any] | None = None) -> str:
+        return "none" if value is None else super().check(name, value, ctx)
+
+
+SAFETY = Section(
+    "safety",
+    "Safety filter",
+    "A decentralised braking-distance CBF filter between the decoded pair command and the "
+    "vehicle model (pairflock_env.safety, docs/safety.md): each paired UAV replaces its pair "
+    "command u by the nearest one with ||u|| <= pair_accel_limit (a ball, not the action "
+    "box) that keeps safety_distance from every UAV it senses. Off by default.",
+    (
+        Field(
+            "safety_filter",
+            FilterChoice(("none", "cbf")),
+            "none",
+            "",
+            '"none": the pair command is applied as decoded; "cbf": every paired UAV filters '
+            "it (infos safety_active, safety_correction, safety_infeasible).",
+        ),
+        Field(
+            "safety_distance",
+            Real(1e-3, MAX_DISTANCE),
+            1.0,
+            "m",
+            "Distance D_s every paired UAV keeps from every other UAV with the filter on.",
+        ),
+        Field(
+            "safety_brake_accel",
+            OrNone(Real(0.0, MAX_GAIN, lo_open=True), "0.5 pair_accel_limit"),
+            None,
+            "m/s^2",
+            "Line-of-sight deceleration alpha a paired UAV counts on from its own acceleration "
+            "when it must brake; at most pair_accel_limit.",
+        ),
+        Field(
+            "safety_other_accel",
+            OrNone(Real(0.0, MAX_GAIN), "0.1 pair_accel_limit"),
+            None,
+            "m/s^2",
+            "Assumed bound A_o on an unpaired UAV's acceleration towards a paired UAV; below "
+            "the brake acceleration.",
+        ),
+        Field(
+            "safety_sensing_radius",
+            Real(1e-3, MAX_DISTANCE),
+            20.0,
+            "m",
+            "A paired UAV constrains its command against the UAVs closer than this; above "
+            "safety_distance.",
+        ),
+        Field(
+            "safety_decay",
+            Real(0.0, 1.0, lo_open=True),
+            0.5,
+            "1",
+            "Discrete barrier rate lambda: H(k+1) >= (1 - lambda) H(k); 1 lets the state "
+            "reach the braking curve in one step.",
+        ),
+    ),
+)
+
+SECTIONS = (SAFETY,)
+
+
+def _brake_within_limit(v: Any) -> str | None:
+    if v.safety_brake_accel is not None and v.safety_brake_accel > v.pair_accel_limit:
+        return f"must be <= pair_accel_limit = {v.pair_accel_limit:g} m/s^2"
+    return None
+
+
+def _other_below_brake(v: Any) -> str | None:
+    a, o = brake_accel(v), other_accel(v)
+    if not o < a:
+        return (
+            f"must keep the other UAVs' bound safety_other_accel ({o:g} m/s^2) below the brake "
+            f"acceleration safety_brake_accel ({a:g} m/s^2; None: 0.5 pair_accel_limit)"
+        )
+    return None
+
+
+def _radius_beyond_distance(v: Any) -> str | None:
+    if not v.safety_sensing_radius > v.safety_distance:
+        return (
+            f"must keep safety_sensing_radius ({v.safety_sensing_radius:g} m) above "
+            f"safety_distance ({v.safety_distance:g} m)"
+        )
+    return None
+
+
+RULES = (
+    Rule(
+        ("safety_brake_accel", "pair_accel_limit"),
+        _brake_within_limit,
+        "safety_brake_accel <= pair_accel_limit",
+    ),
+    Rule(
+        ("safety_other_accel", "safety_brake_accel", "pair_accel_limit"),
+        _other_below_brake,
+        "safety_other_accel < the brake acceleration (each default or set)",
+    ),
+    Rule(
+        ("safety_sensing_radius", "safety_distance"),
+        _radius_beyond_distance,
+        "safety_sensing_radius > safety_distance",
+    ),
+)
