@@ -3,12 +3,15 @@
     python benchmarks/bench_core.py            # everything, prints markdown tables
     python benchmarks/bench_core.py --quick    # fewer repeats
     python benchmarks/bench_core.py --sections kernels   # only the neighbour kernels
+    python benchmarks/bench_core.py --sections large     # full core step, N up to 10,000
+    python benchmarks/bench_core.py --sections threshold # where "auto" switches to the grid
 
 Reports UAV-steps/s (simulated UAVs x control steps per wall second) of
 ``PairFlockCore.step`` for N in {20, 50, 100} x B in {1, 64, 256} (medians over repeats),
 env steps/s of the PettingZoo ``step()`` at B = 1, where the time of one core step goes, and
 the neighbour kernels alone (flocking and pair sweeps, plus the grid build on the grid path)
-with all pairs and with the grid, for N up to 10,000.
+with all pairs and with the grid, for N up to 10,000; the full core step of large swarms with
+each ``neighbor_search`` (``large``) and the crossover that sets "auto" (``threshold``).
 Everything runs on one thread (numba kernels are single-threaded; OMP/MKL pinned to 1).
 """
 
@@ -29,7 +32,7 @@ from _timing import median_rate, print_breakdown  # noqa: E402
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
 from pairflock_env.flocking import FlockingParams, flocking_pass, pair_pass  # noqa: E402
 
-SECTIONS = ("core", "pettingzoo", "breakdown", "kernels")
+SECTIONS = ("core", "pettingzoo", "breakdown", "kernels", "large", "threshold")
 _CLOCK = {"clock": time.perf_counter}  # --cpu-time switches to time.process_time
 
 
@@ -38,8 +41,15 @@ def rate(fn, work: float, repeats: int, min_time: float) -> float:
     return median_rate(fn, work, repeats, min_time, clock=_CLOCK["clock"])
 
 
-def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
-    cfg = make_config("paper", n_uavs=N, max_cycles=10**9)
+def _search(search: str | None) -> dict:
+    # keyword only when asked, so that the core section runs against checkouts without it
+    return {} if search is None else {"neighbor_search": search}
+
+
+def bench_core(N: int, B: int, repeats: int, min_time: float, search: str | None = None) -> float:
+    """UAV-steps/s of ``PairFlockCore.step`` from the reset state of the paper preset with
+    N UAVs (start box grown with N), under small random pair actions."""
+    cfg = make_config("paper", n_uavs=N, max_cycles=10**9, **_search(search))
     core = PairFlockCore(cfg, num_envs=B)
     core.reset(seed=0)
     rng = np.random.default_rng(0)
@@ -48,20 +58,24 @@ def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
 
 
 def bench_pettingzoo(N: int, repeats: int, min_time: float) -> float:
-    env = parallel_env(preset="paper", n_uavs=N, max_cycles=10**9)
+    env = parallel_env(preset="paper", n_uavs=N, max_cycles=10**9)  # "auto" search
     env.reset(seed=0)
     act = {a: np.full(2, 0.1, np.float32) for a in env.agents}
     return rate(lambda: env.step(act), 1, repeats, min_time)
 
 
-def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
+def breakdown(N: int, B: int, repeats: int, search: str | None = None) -> dict[str, float]:
     """Microseconds per control step spent in each part of ``PairFlockCore.step``."""
-    cfg = make_config("paper", n_uavs=N, max_cycles=10**9)
+    cfg = make_config("paper", n_uavs=N, max_cycles=10**9, **_search(search))
     core = PairFlockCore(cfg, num_envs=B)
     core.reset(seed=0)
     actions = np.zeros((B, core.n_agents, cfg.dim))
     lq, lp = core.leader_state()
     fl_out, pp_out = {}, {}
+    grid = getattr(core, "neighbor_grid", None)
+
+    def build():
+        grid.build(core.q)
 
     def flock():
         fl_out.update(
@@ -74,6 +88,7 @@ def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
                 core.pinned,
                 core.partner_of,
                 out=fl_out or None,
+                grid=grid,
             )
         )
 
@@ -87,6 +102,7 @@ def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
                 cfg.radius,
                 cfg.obs_neighbors,
                 out=pp_out or None,
+                grid=grid,
             )
         )
 
@@ -95,6 +111,10 @@ def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
 
     parts = {
         "total core.step": 1e6 / rate(lambda: core.step(actions), 1, repeats, 0.2),
+    }
+    if grid is not None:
+        parts["grid build (numba)"] = 1e6 / rate(build, 1, repeats, 0.2)
+    parts |= {
         "flocking sweep (numba)": 1e6 / rate(flock, 1, repeats, 0.2),
         "pair/neighbour sweep (numba)": 1e6 / rate(pairs, 1, repeats, 0.2),
         "integration (numpy)": 1e6 / rate(integrate, 1, repeats, 0.2),
@@ -175,6 +195,53 @@ def kernel_tables(repeats: int, min_time: float) -> None:
         print(f"\nGrid: per-UAV cost at N = 10,000 / at N = 300 (B = 1): {ratio:.2f}")
 
 
+LARGE_SIZES = ((300, 1), (1000, 1), (3000, 1), (10000, 1), (1000, 16))
+#: the all-pairs core at N = 100, B = 256 before the grid was integrated (UAV-steps/s,
+#: bench_core.py --sections core at commit f107d5b, this machine)
+ALL_PAIRS_N100_B256 = 3_071_349
+
+
+def large_tables(repeats: int, min_time: float) -> None:
+    """The full core step of large swarms with both searches; ratios from this one run."""
+    print(
+        "\n## Core `PairFlockCore.step` of large swarms (reset state): UAV-steps/s (median)\n\n"
+        "| N | B | all pairs | grid | grid / all pairs |\n|---|---|---|---|---|"
+    )
+    grid = {}
+    for N, B in LARGE_SIZES:
+        # all pairs at N = 10,000 takes ~1 s a step: fewer, shorter batches
+        slow = N * N * B > 2e7
+        a = bench_core(N, B, 1 if slow else repeats, 0.0 if slow else min_time, "all_pairs")
+        g = grid[N, B] = bench_core(N, B, repeats, min_time, "grid")
+        print(f"| {N:,} | {B} | {a:,.0f} | {g:,.0f} | {g / a:.1f}x |")
+    ratio = grid[300, 1] / grid[10000, 1]
+    print(f"\nGrid: per-UAV cost at N = 10,000 / at N = 300 (B = 1): {ratio:.2f} (target <= 2.5)")
+    print(f"Grid at N = 10,000, B = 1: {grid[10000, 1]:,.0f} UAV-steps/s (target >= 1,000,000)")
+    auto = bench_core(100, 256, repeats, min_time, "auto")
+    pairs = bench_core(100, 256, repeats, min_time, "all_pairs")
+    print(
+        f"N = 100, B = 256: auto {auto:,.0f}, all pairs {pairs:,.0f} UAV-steps/s "
+        f"(all pairs before the grid: {ALL_PAIRS_N100_B256:,})"
+    )
+    r = bench_pettingzoo(10000, repeats, min_time)
+    print(f"PettingZoo step() at N = 10,000: {r:,.1f} steps/s ({r * 1e4:,.0f} UAV-steps/s)")
+    print_breakdown("Where the time goes: N = 10,000, B = 1, grid", breakdown(10000, 1, repeats))
+
+
+def threshold_table(repeats: int, min_time: float) -> None:
+    """Core step with each search around the crossover (B = 1 and B = 64): where "auto"
+    switches to the grid."""
+    print(
+        "\n## Crossover of the searches: core UAV-steps/s (median)\n\n"
+        "| N | B | all pairs | grid | grid / all pairs |\n|---|---|---|---|---|"
+    )
+    for N in (100, 150, 200, 300, 500):
+        for B in (1, 64):
+            a = bench_core(N, B, repeats, min_time, "all_pairs")
+            g = bench_core(N, B, repeats, min_time, "grid")
+            print(f"| {N} | {B} | {a:,.0f} | {g:,.0f} | {g / a:.2f}x |")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(
         prog="python benchmarks/bench_core.py",
@@ -186,7 +253,11 @@ def main(argv=None) -> int:
     ap.add_argument("--n-uavs", type=int, nargs="+", default=[20, 50, 100])
     ap.add_argument("--batch", type=int, nargs="+", default=[1, 64, 256])
     ap.add_argument(
-        "--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS), help="what to run"
+        "--sections",
+        nargs="+",
+        choices=SECTIONS,
+        default=list(SECTIONS[:4]),
+        help="what to run (default: the first four)",
     )
     ap.add_argument(
         "--cpu-time",
@@ -220,6 +291,10 @@ def main(argv=None) -> int:
             print_breakdown(f"Where the time goes: N = {N}, B = {B}", breakdown(N, B, repeats))
     if "kernels" in args.sections:
         kernel_tables(repeats, min_time)
+    if "threshold" in args.sections:
+        threshold_table(repeats, min_time)
+    if "large" in args.sections:
+        large_tables(repeats, min_time)
     return 0
 
 
