@@ -21,8 +21,11 @@ __all__ = [
     "uses_grid",
 ]
 
-#: smallest swarm for which neighbor_search="auto" picks the grid. MEASURED (placeholder)
-GRID_MIN_UAVS = 200
+#: smallest swarm for which neighbor_search="auto" picks the grid. Measured with
+#: ``python benchmarks/bench_core.py --quick --cpu-time --sections threshold`` (core step from
+#: the reset state, UAV-steps/s, grid / all pairs): N = 150: 0.95x (B = 1), 0.75x (B = 64);
+#: N = 200: 1.18x, 0.93x; N = 300: 1.69x, 1.36x. The grid wins from about 250 UAVs at any B.
+GRID_MIN_UAVS = 250
 
 
 def uses_grid(v: Any) -> bool:
