@@ -98,3 +98,15 @@ def test_ten_thousand_uavs_just_work():
     obs, _, term, trunc, _ = env.step({a: np.zeros(2, np.float32) for a in env.agents})
     assert all(np.isfinite(o).all() for o in obs.values())
     assert not any(term.values()) and not any(trunc.values())
+
+
+def test_a_frame_of_ten_thousand_uavs():
+    """Rendering is O(N): a frame of 10,000 UAVs draws, markers shrink for crowded swarms
+    (pairs keep the uncrowded size) and swarms up to CROWD_UAVS are drawn as before."""
+    from pairflock_env.render import CROWD_UAVS, SwarmRenderer, crowd_scale
+
+    assert crowd_scale(CROWD_UAVS) == 1.0 and crowd_scale(4 * CROWD_UAVS) == 0.5
+    rng = np.random.default_rng(0)
+    q, p = rng.uniform(-500.0, 500.0, (10_000, 2)), rng.normal(size=(10_000, 2))
+    frame = SwarmRenderer(((0, 1), (2, 3)), 5.0, "rgb_array").rgb_array(q, p, np.zeros(2))
+    assert frame.ndim == 3 and frame.dtype == np.uint8 and frame.std() > 0
