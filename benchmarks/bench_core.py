@@ -278,17 +278,19 @@ def large_tables(repeats: int, min_time: float) -> None:
 
 
 def threshold_table(repeats: int, min_time: float) -> None:
-    """Core step with each search around the crossover (B = 1 and B = 64): where "auto"
-    switches to the grid."""
+    """Core step with each search around the crossover (B = 1 and B = 64, start and flock
+    states): where "auto" switches to the grid."""
     print(
-        "\n## Crossover of the searches: core UAV-steps/s (median)\n\n"
-        "| N | B | all pairs | grid | grid / all pairs |\n|---|---|---|---|---|"
+        f"\n## Crossover of the searches: core UAV-steps/s (median of {repeats} rollouts of "
+        f"{ROLLOUT_STEPS} steps)\n\n"
+        "| N | B | state | all pairs | grid | grid / all pairs |\n|---|---|---|---|---|---|"
     )
-    for N in (100, 150, 200, 300, 500):
+    for N in (100, 150, 200, 250, 300, 500):
         for B in (1, 64):
-            a = bench_core(N, B, repeats, min_time, "all_pairs")
-            g = bench_core(N, B, repeats, min_time, "grid")
-            print(f"| {N} | {B} | {a:,.0f} | {g:,.0f} | {g / a:.2f}x |")
+            for kind in ("start", "flock"):
+                a = bench_rollout(N, B, "all_pairs", kind, repeats)
+                g = bench_rollout(N, B, "grid", kind, repeats)
+                print(f"| {N} | {B} | {kind} | {a:,.0f} | {g:,.0f} | {g / a:.2f}x |")
 
 
 def main(argv=None) -> int:
