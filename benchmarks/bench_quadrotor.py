@@ -21,6 +21,7 @@ pin_threads()  # one thread for OpenMP/MKL/OpenBLAS/numba, before numpy loads
 import argparse  # noqa: E402
 import os  # noqa: E402
 import platform  # noqa: E402
+import statistics  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -106,6 +107,40 @@ def bench_large(N: int, repeats: int, min_time: float, clock=time.perf_counter):
     act = {a: np.full(3, 0.05, np.float32) for a in env.agents}
     r_env = median_rate(lambda: env.step(act), cfg.dt, repeats, min_time, clock)
     return r_core, r_env
+
+
+def large_breakdown(N: int, repeats: int, min_time: float, clock) -> dict[str, float]:
+    """Microseconds per control step of N quadrotors at B = 1, by part (timed on the reset
+    state, the core step over 20-step rollouts from it)."""
+    cfg = large_config(N)
+    core = PairFlockCore(cfg)
+    core.reset(seed=0)
+    q, p, a_des = core.q.copy(), core.p.copy(), core.flock_accel.copy()
+    lq, lp = core.leader_state()
+    acts = np.zeros((1, core.n_agents, 3))
+
+    def us(fn):
+        return 1e6 / median_rate(fn, 1.0, repeats, min_time, clock)
+
+    steps = []
+    for _ in range(repeats + 1):  # the first rollout warms up
+        core.reset(seed=0)
+        t0 = clock()
+        for _ in range(20):
+            core.step(acts)
+        steps.append((clock() - t0) / 20)
+    core.reset(seed=0)
+    parts = {"total core.step": 1e6 * statistics.median(steps[1:])}
+    parts["quadrotor: substeps of controller + mixer + motors + rigid body (numba)"] = us(
+        lambda: core.vehicle.advance(q.copy(), p.copy(), a_des)
+    )
+    parts["neighbour sweep: grid build, flocking and pair sweeps (numba)"] = us(
+        lambda: core._neighbors.run(core.q, core.p, lq, lp, core.pinned)
+    )
+    parts["rest: checks, observations, rewards, infos (numpy)"] = max(
+        0.0, parts["total core.step"] - sum(v for k, v in parts.items() if k != "total core.step")
+    )
+    return parts
 
 
 def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
@@ -210,6 +245,9 @@ def main(argv=None) -> int:
             r_core, r_env = bench_large(N, repeats, min_time, clock)
             search = "grid" if large_config(N).uses_grid else "all pairs"
             print(f"| {N:,} | {search} | {r_core:.2f} | {r_env:.2f} |")
+        for N in args.large or [1000]:
+            parts = large_breakdown(N, repeats, min_time, clock)
+            print_breakdown(f"Where the time goes: {N:,} quadrotors, B = 1", parts)
         return 0
 
     print(

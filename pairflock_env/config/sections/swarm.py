@@ -21,10 +21,13 @@ __all__ = [
     "uses_grid",
 ]
 
-#: smallest swarm for which neighbor_search="auto" picks the grid. Measured with
-#: ``python benchmarks/bench_core.py --quick --cpu-time --sections threshold`` (core step from
-#: the reset state, UAV-steps/s, grid / all pairs): N = 150: 0.95x (B = 1), 0.75x (B = 64);
-#: N = 200: 1.18x, 0.93x; N = 300: 1.69x, 1.36x. The grid wins from about 250 UAVs at any B.
+#: smallest swarm for which neighbor_search="auto" picks the grid. Measured (core step,
+#: UAV-steps/s, grid / all pairs, one thread, CPU time): over rollouts of 20 steps from the
+#: start and the lattice states (``python benchmarks/bench_core.py --cpu-time --quick
+#: --sections threshold``) the grid is 0.68-1.25x at N = 100, 1.09-1.63x at 150, 1.20-1.96x
+#: at 200 and 1.64-2.18x at 250 (B = 1 and 64); free-running from reset, where the swarm
+#: contracts and packs denser, it was 0.75-0.95x at 150, 0.93-1.18x at 200 and 1.36-1.69x
+#: at 300. From 250 UAVs the grid wins in every case measured.
 GRID_MIN_UAVS = 250
 
 
