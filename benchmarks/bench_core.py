@@ -78,33 +78,12 @@ def breakdown(N: int, B: int, repeats: int, search: str | None = None) -> dict[s
         grid.build(core.q)
 
     def flock():
-        fl_out.update(
-            flocking_pass(
-                core._params,
-                core.q,
-                core.p,
-                lq,
-                lp,
-                core.pinned,
-                core.partner_of,
-                out=fl_out or None,
-                grid=grid,
-            )
-        )
+        args = (core.q, core.p, lq, lp, core.pinned, core.partner_of)
+        fl_out.update(flocking_pass(core._params, *args, out=fl_out or None, grid=grid))
 
     def pairs():
-        pp_out.update(
-            pair_pass(
-                core.q,
-                core.p,
-                core.agent_uavs,
-                core.partner_uavs,
-                cfg.radius,
-                cfg.obs_neighbors,
-                out=pp_out or None,
-                grid=grid,
-            )
-        )
+        args = (core.q, core.p, core.agent_uavs, core.partner_uavs, cfg.radius)
+        pp_out.update(pair_pass(*args, cfg.obs_neighbors, out=pp_out or None, grid=grid))
 
     def integrate():
         core.vehicle.advance(core.q.copy(), core.p.copy(), core.flock_accel)

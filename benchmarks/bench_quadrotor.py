@@ -143,6 +143,19 @@ def large_breakdown(N: int, repeats: int, min_time: float, clock) -> dict[str, f
     return parts
 
 
+def large_report(sizes, repeats: int, min_time: float, cpu_time: bool) -> None:
+    """``--large``: the real-time factor of each swarm size, then where its time goes."""
+    clock = time.process_time if cpu_time else time.perf_counter
+    print("| N | search | core x real time | PettingZoo x real time |\n|---|---|---|---|")
+    for N in sizes:
+        r_core, r_env = bench_large(N, repeats, min_time, clock)
+        search = "grid" if large_config(N).uses_grid else "all pairs"
+        print(f"| {N:,} | {search} | {r_core:.2f} | {r_env:.2f} |")
+    for N in sizes:
+        parts = large_breakdown(N, repeats, min_time, clock)
+        print_breakdown(f"Where the time goes: {N:,} quadrotors, B = 1", parts)
+
+
 def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
     """Microseconds per control step in each part of one step (B swarms); at B = 1 also the
     PettingZoo layer on top of the core."""
@@ -239,15 +252,7 @@ def main(argv=None) -> int:
     repeats, min_time = (3, 0.2) if args.quick else (7, 0.5)
     cfg = _config()
     if args.large is not None:
-        print("| N | search | core x real time | PettingZoo x real time |\n|---|---|---|---|")
-        for N in args.large or [1000]:
-            clock = time.process_time if args.cpu_time else time.perf_counter
-            r_core, r_env = bench_large(N, repeats, min_time, clock)
-            search = "grid" if large_config(N).uses_grid else "all pairs"
-            print(f"| {N:,} | {search} | {r_core:.2f} | {r_env:.2f} |")
-        for N in args.large or [1000]:
-            parts = large_breakdown(N, repeats, min_time, clock)
-            print_breakdown(f"Where the time goes: {N:,} quadrotors, B = 1", parts)
+        large_report(args.large or [1000], repeats, min_time, args.cpu_time)
         return 0
 
     print(
