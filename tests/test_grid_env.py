@@ -110,3 +110,25 @@ def test_a_frame_of_ten_thousand_uavs():
     q, p = rng.uniform(-500.0, 500.0, (10_000, 2)), rng.normal(size=(10_000, 2))
     frame = SwarmRenderer(((0, 1), (2, 3)), 5.0, "rgb_array").rgb_array(q, p, np.zeros(2))
     assert frame.ndim == 3 and frame.dtype == np.uint8 and frame.std() > 0
+
+
+def _peak_bytes(n_uavs: int) -> int:
+    """Peak of numpy's traced allocations while building, resetting and stepping a core."""
+    import tracemalloc
+
+    tracemalloc.start()
+    core = PairFlockCore(make_config("paper", n_uavs=n_uavs), seed=0)
+    core.reset()
+    core.step(np.zeros((1, core.n_agents, 2)))
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    return peak
+
+
+def test_memory_grows_linearly_with_the_swarm():
+    """Four times the UAVs: about four times the memory (an N x N array would be 16x)."""
+    small = GRID_MIN_UAVS * 4
+    factor = 4
+    _peak_bytes(small)  # compile and import outside the measurement
+    ratio = _peak_bytes(factor * small) / _peak_bytes(small)
+    assert ratio < 1.5 * factor
