@@ -3,12 +3,15 @@
     python benchmarks/bench_core.py            # everything, prints markdown tables
     python benchmarks/bench_core.py --quick    # fewer repeats
     python benchmarks/bench_core.py --sections kernels   # only the neighbour kernels
+    python benchmarks/bench_core.py --sections large     # full core step, N up to 10,000
+    python benchmarks/bench_core.py --sections threshold # where "auto" switches to the grid
 
 Reports UAV-steps/s (simulated UAVs x control steps per wall second) of
 ``PairFlockCore.step`` for N in {20, 50, 100} x B in {1, 64, 256} (medians over repeats),
 env steps/s of the PettingZoo ``step()`` at B = 1, where the time of one core step goes, and
 the neighbour kernels alone (flocking and pair sweeps, plus the grid build on the grid path)
-with all pairs and with the grid, for N up to 10,000.
+with all pairs and with the grid, for N up to 10,000; the full core step of large swarms with
+each ``neighbor_search`` (``large``) and the crossover that sets "auto" (``threshold``).
 Everything runs on one thread (numba kernels are single-threaded; OMP/MKL pinned to 1).
 """
 
@@ -21,6 +24,7 @@ pin_threads()  # one thread for OpenMP/MKL/OpenBLAS/numba, before numpy loads
 import argparse  # noqa: E402
 import os  # noqa: E402
 import platform  # noqa: E402
+import statistics  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -29,7 +33,7 @@ from _timing import median_rate, print_breakdown  # noqa: E402
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
 from pairflock_env.flocking import FlockingParams, flocking_pass, pair_pass  # noqa: E402
 
-SECTIONS = ("core", "pettingzoo", "breakdown", "kernels")
+SECTIONS = ("core", "pettingzoo", "breakdown", "kernels", "large", "threshold")
 _CLOCK = {"clock": time.perf_counter}  # --cpu-time switches to time.process_time
 
 
@@ -38,8 +42,15 @@ def rate(fn, work: float, repeats: int, min_time: float) -> float:
     return median_rate(fn, work, repeats, min_time, clock=_CLOCK["clock"])
 
 
-def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
-    cfg = make_config("paper", n_uavs=N, max_cycles=10**9)
+def _search(search: str | None) -> dict:
+    # keyword only when asked, so that the core section runs against checkouts without it
+    return {} if search is None else {"neighbor_search": search}
+
+
+def bench_core(N: int, B: int, repeats: int, min_time: float, search: str | None = None) -> float:
+    """UAV-steps/s of ``PairFlockCore.step`` from the reset state of the paper preset with
+    N UAVs (start box grown with N), under small random pair actions."""
+    cfg = make_config("paper", n_uavs=N, max_cycles=10**9, **_search(search))
     core = PairFlockCore(cfg, num_envs=B)
     core.reset(seed=0)
     rng = np.random.default_rng(0)
@@ -48,53 +59,42 @@ def bench_core(N: int, B: int, repeats: int, min_time: float) -> float:
 
 
 def bench_pettingzoo(N: int, repeats: int, min_time: float) -> float:
-    env = parallel_env(preset="paper", n_uavs=N, max_cycles=10**9)
+    env = parallel_env(preset="paper", n_uavs=N, max_cycles=10**9)  # "auto" search
     env.reset(seed=0)
     act = {a: np.full(2, 0.1, np.float32) for a in env.agents}
     return rate(lambda: env.step(act), 1, repeats, min_time)
 
 
-def breakdown(N: int, B: int, repeats: int) -> dict[str, float]:
+def breakdown(N: int, B: int, repeats: int, search: str | None = None) -> dict[str, float]:
     """Microseconds per control step spent in each part of ``PairFlockCore.step``."""
-    cfg = make_config("paper", n_uavs=N, max_cycles=10**9)
+    cfg = make_config("paper", n_uavs=N, max_cycles=10**9, **_search(search))
     core = PairFlockCore(cfg, num_envs=B)
     core.reset(seed=0)
-    actions = np.zeros((B, core.n_agents, cfg.dim))
     lq, lp = core.leader_state()
     fl_out, pp_out = {}, {}
+    grid = getattr(core, "neighbor_grid", None)
+
+    def build():
+        grid.build(core.q)
 
     def flock():
-        fl_out.update(
-            flocking_pass(
-                core._params,
-                core.q,
-                core.p,
-                lq,
-                lp,
-                core.pinned,
-                core.partner_of,
-                out=fl_out or None,
-            )
-        )
+        args = (core.q, core.p, lq, lp, core.pinned, core.partner_of)
+        fl_out.update(flocking_pass(core._params, *args, out=fl_out or None, grid=grid))
 
     def pairs():
-        pp_out.update(
-            pair_pass(
-                core.q,
-                core.p,
-                core.agent_uavs,
-                core.partner_uavs,
-                cfg.radius,
-                cfg.obs_neighbors,
-                out=pp_out or None,
-            )
-        )
+        args = (core.q, core.p, core.agent_uavs, core.partner_uavs, cfg.radius)
+        pp_out.update(pair_pass(*args, cfg.obs_neighbors, out=pp_out or None, grid=grid))
 
     def integrate():
         core.vehicle.advance(core.q.copy(), core.p.copy(), core.flock_accel)
 
     parts = {
-        "total core.step": 1e6 / rate(lambda: core.step(actions), 1, repeats, 0.2),
+        # rollouts from the reset state, the state the parts below are timed on
+        "total core.step": 1e6 * B * N / bench_rollout(N, B, search, "start", repeats),
+    }
+    if grid is not None:
+        parts["grid build (numba)"] = 1e6 / rate(build, 1, repeats, 0.2)
+    parts |= {
         "flocking sweep (numba)": 1e6 / rate(flock, 1, repeats, 0.2),
         "pair/neighbour sweep (numba)": 1e6 / rate(pairs, 1, repeats, 0.2),
         "integration (numpy)": 1e6 / rate(integrate, 1, repeats, 0.2),
@@ -175,6 +175,103 @@ def kernel_tables(repeats: int, min_time: float) -> None:
         print(f"\nGrid: per-UAV cost at N = 10,000 / at N = 300 (B = 1): {ratio:.2f}")
 
 
+LARGE_SIZES = ((300, 1), (1000, 1), (3000, 1), (10000, 1), (1000, 16))
+#: the all-pairs core at N = 100, B = 256 before the grid was integrated (UAV-steps/s,
+#: bench_core.py --sections core at commit f107d5b, this machine)
+ALL_PAIRS_N100_B256 = 3_071_349
+#: control steps of one timed rollout: 0.2 s of flight, so the state timed is the one asked
+#: for (a swarm pinned to one leader contracts: after 8 s of flight 10,000 UAVs are packed
+#: far denser than the lattice, and every step costs more)
+ROLLOUT_STEPS = 20
+
+
+def start_options(kind: str, N: int, B: int) -> dict | None:
+    """Reset options of a large-swarm state: ``"start"`` (None: the config's random start,
+    sparse) or ``"flock"`` (the jittered alpha-lattice of :func:`kernel_state`, centred)."""
+    if kind == "start":
+        return None
+    q, _ = kernel_state("flock", N, B)
+    return {"positions": q - q.mean(axis=1, keepdims=True)}
+
+
+def bench_rollout(
+    N: int, B: int, search: str | None, kind: str, repeats: int, steps: int = ROLLOUT_STEPS
+) -> float:
+    """UAV-steps/s of ``steps`` core steps from state ``kind`` (reset untimed), the median
+    over ``repeats`` rollouts (after one untimed rollout that compiles and warms up)."""
+    cfg = make_config("paper", n_uavs=N, max_cycles=10**9, **_search(search))
+    core = PairFlockCore(cfg, num_envs=B)
+    actions = np.random.default_rng(0).uniform(-0.2, 0.2, (B, core.n_agents, cfg.dim))
+    options = start_options(kind, N, B)
+    rates = []
+    for _ in range(repeats + 1):
+        core.reset(seed=0, options=options)
+        t0 = _CLOCK["clock"]()
+        for _ in range(steps):
+            core.step(actions)
+        rates.append(B * N * steps / (_CLOCK["clock"]() - t0))
+    return statistics.median(rates[1:])
+
+
+def pettingzoo_rollout(N: int, repeats: int, steps: int = ROLLOUT_STEPS) -> float:
+    """Env steps/s of ``parallel_env.step()`` (defaults, N UAVs) over rollouts from reset."""
+    env = parallel_env(preset="paper", n_uavs=N, max_cycles=10**9)
+    rates = []
+    for _ in range(repeats + 1):
+        env.reset(seed=0)
+        act = {a: np.full(2, 0.1, np.float32) for a in env.agents}
+        t0 = _CLOCK["clock"]()
+        for _ in range(steps):
+            env.step(act)
+        rates.append(steps / (_CLOCK["clock"]() - t0))
+    return statistics.median(rates[1:])
+
+
+def large_tables(repeats: int, min_time: float) -> None:
+    """The full core step of large swarms with both searches; ratios from this one run."""
+    for kind in ("start", "flock"):
+        print(
+            f"\n## Core `PairFlockCore.step` of large swarms, {kind} state: UAV-steps/s "
+            f"(median of {repeats} rollouts of {ROLLOUT_STEPS} steps)\n\n"
+            "| N | B | all pairs | grid | grid / all pairs |\n|---|---|---|---|---|"
+        )
+        grid = {}
+        for N, B in LARGE_SIZES:
+            slow = N * N * B > 2e7  # all pairs at N = 10,000: ~0.1 s a step, one rollout
+            a = bench_rollout(N, B, "all_pairs", kind, 1 if slow else repeats)
+            g = grid[N, B] = bench_rollout(N, B, "grid", kind, repeats)
+            print(f"| {N:,} | {B} | {a:,.0f} | {g:,.0f} | {g / a:.1f}x |")
+        ratio = grid[300, 1] / grid[10000, 1]
+        print(f"\nGrid, {kind} state: per-UAV cost at N = 10,000 / at N = 300 (B = 1): {ratio:.2f}")
+    # the same code path (auto is all pairs at N = 100): alternate them, so that a change of
+    # load on a shared machine hits both alike
+    runs = [bench_core(100, 256, repeats, min_time, s) for s in ("auto", "all_pairs") * 3]
+    auto, pairs = statistics.median(runs[0::2]), statistics.median(runs[1::2])
+    print(
+        f"\nN = 100, B = 256: auto {auto:,.0f}, all pairs {pairs:,.0f} UAV-steps/s "
+        f"(all pairs before the grid: {ALL_PAIRS_N100_B256:,})"
+    )
+    r = pettingzoo_rollout(10000, repeats)
+    print(f"PettingZoo step() at N = 10,000: {r:,.1f} steps/s ({r * 1e4:,.0f} UAV-steps/s)")
+    print_breakdown("Where the time goes: N = 10,000, B = 1, grid", breakdown(10000, 1, repeats))
+
+
+def threshold_table(repeats: int, min_time: float) -> None:
+    """Core step with each search around the crossover (B = 1 and B = 64, start and flock
+    states): where "auto" switches to the grid."""
+    print(
+        f"\n## Crossover of the searches: core UAV-steps/s (median of {repeats} rollouts of "
+        f"{ROLLOUT_STEPS} steps)\n\n"
+        "| N | B | state | all pairs | grid | grid / all pairs |\n|---|---|---|---|---|---|"
+    )
+    for N in (100, 150, 200, 250, 300, 500):
+        for B in (1, 64):
+            for kind in ("start", "flock"):
+                a = bench_rollout(N, B, "all_pairs", kind, repeats)
+                g = bench_rollout(N, B, "grid", kind, repeats)
+                print(f"| {N} | {B} | {kind} | {a:,.0f} | {g:,.0f} | {g / a:.2f}x |")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(
         prog="python benchmarks/bench_core.py",
@@ -186,7 +283,11 @@ def main(argv=None) -> int:
     ap.add_argument("--n-uavs", type=int, nargs="+", default=[20, 50, 100])
     ap.add_argument("--batch", type=int, nargs="+", default=[1, 64, 256])
     ap.add_argument(
-        "--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS), help="what to run"
+        "--sections",
+        nargs="+",
+        choices=SECTIONS,
+        default=list(SECTIONS[:4]),
+        help="what to run (default: the first four)",
     )
     ap.add_argument(
         "--cpu-time",
@@ -220,6 +321,10 @@ def main(argv=None) -> int:
             print_breakdown(f"Where the time goes: N = {N}, B = {B}", breakdown(N, B, repeats))
     if "kernels" in args.sections:
         kernel_tables(repeats, min_time)
+    if "threshold" in args.sections:
+        threshold_table(repeats, min_time)
+    if "large" in args.sections:
+        large_tables(repeats, min_time)
     return 0
 
 

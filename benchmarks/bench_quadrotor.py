@@ -3,6 +3,7 @@ physics) through the public PettingZoo API at B = 1 and through the batched core
 
     python benchmarks/bench_quadrotor.py            # 7 repeats of >= 0.5 s per figure
     python benchmarks/bench_quadrotor.py --quick    # 3 repeats of >= 0.2 s
+    python benchmarks/bench_quadrotor.py --large    # 1,000 quadrotors: real-time factor
 
 Reports simulated seconds per wall second (B = 1; targets >= 20, i.e. 20 x real time) and
 swarm-seconds per wall second (B swarms x simulated seconds; target >= 300 at B = 64), as
@@ -20,6 +21,8 @@ pin_threads()  # one thread for OpenMP/MKL/OpenBLAS/numba, before numpy loads
 import argparse  # noqa: E402
 import os  # noqa: E402
 import platform  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
 
 import numpy as np  # noqa: E402
 from _timing import median_rate, print_breakdown  # noqa: E402
@@ -82,6 +85,75 @@ def bench_bare_model(B: int, repeats: int, min_time: float) -> float:
     model.reset_rows(np.arange(B), q, p)
     a = np.random.default_rng(0).uniform(-1.0, 1.0, q.shape)
     return median_rate(lambda: model.advance(q, p, a), B * cfg.dt, repeats, min_time)
+
+
+def large_config(N: int):
+    """The quadrotor scenario with N UAVs at the preset's start density: the box
+    (6, 6, 1.5) m for 10 UAVs scaled by (N / 10)^(1/3) on each axis."""
+    scale = (N / 10) ** (1 / 3)
+    return _config(n_uavs=N, swarm_half_width=(6.0 * scale, 6.0 * scale, 1.5 * scale))
+
+
+def bench_large(N: int, repeats: int, min_time: float, clock=time.perf_counter):
+    """Real-time factor (simulated s per wall s, or per CPU s with ``clock=process_time``) of
+    N quadrotors at B = 1: the core step and the PettingZoo ``step()``."""
+    cfg = large_config(N)
+    core = PairFlockCore(cfg)
+    core.reset(seed=0)
+    actions = np.random.default_rng(0).uniform(-0.2, 0.2, (1, core.n_agents, 3))
+    r_core = median_rate(lambda: core.step(actions), cfg.dt, repeats, min_time, clock)
+    env = parallel_env(config=cfg)
+    env.reset(seed=0)
+    act = {a: np.full(3, 0.05, np.float32) for a in env.agents}
+    r_env = median_rate(lambda: env.step(act), cfg.dt, repeats, min_time, clock)
+    return r_core, r_env
+
+
+def large_breakdown(N: int, repeats: int, min_time: float, clock) -> dict[str, float]:
+    """Microseconds per control step of N quadrotors at B = 1, by part (timed on the reset
+    state, the core step over 20-step rollouts from it)."""
+    cfg = large_config(N)
+    core = PairFlockCore(cfg)
+    core.reset(seed=0)
+    q, p, a_des = core.q.copy(), core.p.copy(), core.flock_accel.copy()
+    lq, lp = core.leader_state()
+    acts = np.zeros((1, core.n_agents, 3))
+
+    def us(fn):
+        return 1e6 / median_rate(fn, 1.0, repeats, min_time, clock)
+
+    steps = []
+    for _ in range(repeats + 1):  # the first rollout warms up
+        core.reset(seed=0)
+        t0 = clock()
+        for _ in range(20):
+            core.step(acts)
+        steps.append((clock() - t0) / 20)
+    core.reset(seed=0)
+    parts = {"total core.step": 1e6 * statistics.median(steps[1:])}
+    parts["quadrotor: substeps of controller + mixer + motors + rigid body (numba)"] = us(
+        lambda: core.vehicle.advance(q.copy(), p.copy(), a_des)
+    )
+    parts["neighbour sweep: grid build, flocking and pair sweeps (numba)"] = us(
+        lambda: core._neighbors.run(core.q, core.p, lq, lp, core.pinned)
+    )
+    parts["rest: checks, observations, rewards, infos (numpy)"] = max(
+        0.0, parts["total core.step"] - sum(v for k, v in parts.items() if k != "total core.step")
+    )
+    return parts
+
+
+def large_report(sizes, repeats: int, min_time: float, cpu_time: bool) -> None:
+    """``--large``: the real-time factor of each swarm size, then where its time goes."""
+    clock = time.process_time if cpu_time else time.perf_counter
+    print("| N | search | core x real time | PettingZoo x real time |\n|---|---|---|---|")
+    for N in sizes:
+        r_core, r_env = bench_large(N, repeats, min_time, clock)
+        search = "grid" if large_config(N).uses_grid else "all pairs"
+        print(f"| {N:,} | {search} | {r_core:.2f} | {r_env:.2f} |")
+    for N in sizes:
+        parts = large_breakdown(N, repeats, min_time, clock)
+        print_breakdown(f"Where the time goes: {N:,} quadrotors, B = 1", parts)
 
 
 def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
@@ -164,9 +236,24 @@ def main(argv=None) -> int:
         default=[1, 16, 64, 256],
         help="numbers of swarms B for the core table",
     )
+    ap.add_argument(
+        "--large",
+        type=int,
+        nargs="*",
+        metavar="N",
+        help="only the real-time factor of N quadrotors (default N = 1,000) at B = 1",
+    )
+    ap.add_argument(
+        "--cpu-time",
+        action="store_true",
+        help="with --large: per CPU second of this process (steadier on a shared machine)",
+    )
     args = ap.parse_args(argv)
     repeats, min_time = (3, 0.2) if args.quick else (7, 0.5)
     cfg = _config()
+    if args.large is not None:
+        large_report(args.large or [1000], repeats, min_time, args.cpu_time)
+        return 0
 
     print(
         f"# pairflock_env quadrotor speed ({platform.processor() or platform.machine()}, "

@@ -18,7 +18,9 @@ One control step (:meth:`PairFlockCore.step`), stage by stage:
    (:mod:`~pairflock_env.step_result`) follow.
 
 The flocking command of stage 3 was computed at the end of the previous step (or at reset),
-so each step does exactly one O(N^2) sweep. Initial states come from
+so each step does exactly one sweep: over all pairs (O(N^2)) or, with ``neighbor_search``
+resolving to the grid, over a :class:`~pairflock_env.neighbors.NeighborGrid` rebuilt from
+the positions first (O(N)); both give the same results. Initial states come from
 :mod:`~pairflock_env.placement`. Views (PettingZoo, Gymnasium, SB3) only validate, reshape,
 name agents and apply their auto-reset rule.
 """
@@ -34,10 +36,10 @@ from .actions import check_pair_actions, decode_pair_actions, real_array
 from .config import PairFlockConfig, make_config
 from .delay import PartnerDelayBuffer
 from .dynamics import make_vehicle
-from .flocking import FlockingParams, flocking_pass, pair_pass
+from .flocking import FlockingParams
 from .leader import make_leader
+from .neighbors import NeighborGrid
 from .observations import ObsLayout, add_sensor_noise, build_observation
-from .pairing import agent_pair_state
 from .placement import check_reset_options, initial_state, pinning_mask
 from .rewards import (
     DIVERGENCE_PENALTY,
@@ -55,6 +57,7 @@ from .step_result import (
     hold_last_finite,
     make_info,
 )
+from .sweep import NeighborSweep
 
 __all__ = [
     "AGENT_INFO_KEYS",
@@ -125,6 +128,7 @@ class PairFlockCore:
         self._agent_dm = cfg.d_m_array[self.agent_pair]  # (M,)
 
         self._params = FlockingParams(cfg)
+        self._neighbors = NeighborSweep(cfg, B, self._params, self.partner_of)
         self._leader = make_leader(cfg)
         self.vehicle = make_vehicle(cfg, B)
         self.safety = SafetyStage(cfg, self.agent_uavs, B)  # stage 2b (safety_filter)
@@ -134,7 +138,6 @@ class PairFlockCore:
         self.steps = np.zeros(B, np.int64)
         self._pinned = np.zeros((B, N))
         self._flock_out: dict[str, np.ndarray] | None = None
-        self._pair_out: dict[str, np.ndarray] | None = None
         M = 2 * len(pairs)
         self._obs = np.zeros((B, M, self.layout.size), np.float32)
         self._info: dict[str, np.ndarray] | None = None  # the last step's infos
@@ -181,6 +184,13 @@ class PairFlockCore:
         """Flocking command (eq. 11 without f^x) of the current state, (B, N, dim)."""
         self._require_reset()
         return self._flock_out["acc"]
+
+    @property
+    def neighbor_grid(self) -> NeighborGrid | None:
+        """The neighbour grid of the current state, built by the last sweep (``None`` with
+        all-pairs search): a stage that needs the neighbours of the current state (a safety
+        filter between decoding and the desired acceleration) queries it."""
+        return self._neighbors.grid
 
     @property
     def pinned(self) -> np.ndarray:
@@ -345,20 +355,10 @@ class PairFlockCore:
         return StepResult(obs, reward, terminated, truncated, info)
 
     def _sweep(self, lq: np.ndarray, lp: np.ndarray) -> tuple[dict, dict[str, np.ndarray]]:
-        """The flocking sweep of the current state, and the agents' pair quantities (B, M):
-        partner offset and velocity, distance, error, sliding surface, separation and
-        shared neighbours (plus the neighbour slots of the observation)."""
-        cfg, q, p = self.config, self.q, self.p
-        ia, ip = self.agent_uavs, self.partner_uavs
-        fl = self._flock_out = flocking_pass(
-            self._params, q, p, lq, lp, self._pinned, self.partner_of, out=self._flock_out
-        )
-        pp = self._pair_out = pair_pass(
-            q, p, ia, ip, cfg.radius, cfg.obs_neighbors, out=self._pair_out
-        )
-        pair = agent_pair_state(q, p, ia, ip, self._agent_dm, cfg.surface_slope)
-        pair["min_separation"] = np.sqrt(fl["min_d2"][:, ia])
-        pair["shared_neighbors"] = pp["shared"][:, self.agent_pair]
+        """The flocking sweep of the current state and the agents' pair quantities (B, M)
+        (:class:`~pairflock_env.sweep.NeighborSweep`)."""
+        fl, pair = self._neighbors.run(self.q, self.p, lq, lp, self._pinned)
+        self._flock_out = fl
         return fl, pair
 
     def _perceived_partner(
@@ -407,7 +407,7 @@ class PairFlockCore:
         """The observation (B, M, obs_size) float32 of the current state (layout by name)."""
         off, vel, acc_partner = self._perceived_partner(pair, reset_rows)
         qa, pa = pair["q"], pair["p"]
-        pp = self._pair_out
+        pp = self._neighbors.pair_out
         B, M = qa.shape[:2]
         fields = {
             "partner_offset": off,

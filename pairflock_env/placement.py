@@ -8,11 +8,13 @@ Placement (``config.init``):
 * every other UAV is drawn uniformly in the start box: +-``pair_corner`` per axis for paired
   UAVs, +-``swarm_half_width`` for unpaired ones, one ``rng.uniform(-1, 1, (n, dim))`` call;
 * with ``min_init_spacing`` > 0, every free UAV closer than that to a fixed UAV or to a UAV of
-  lower index is redrawn (all such UAVs in one call per round), for at most 1,000 rounds;
+  lower index is redrawn (all such UAVs in one call per round), for at most 1,000 rounds; a
+  neighbour grid finds the conflicts (:mod:`~pairflock_env.grid_placement`), so a round
+  costs O(N) time and memory;
 * the whole swarm is then shifted by ``swarm_center``; velocities start at zero.
 
 Pinning (h_i of eq. 6, ``config.pinning``): ``"all"``, an int k (the k UAVs nearest the
-leader's initial position, ties by index) or a sequence of UAV indices.
+leader's initial position, ties by index, found in O(N)) or a sequence of UAV indices.
 
 The random draws are made in exactly this order, so a seed gives the same swarm every time.
 
@@ -29,6 +31,8 @@ from typing import Any
 import numpy as np
 
 from .config import PairFlockConfig, corner_diagonals
+from .grid_placement import redraw_conflicts
+from .neighbors import nearest_indices
 
 __all__ = [
     "MAX_PLACEMENT_ROUNDS",
@@ -83,24 +87,14 @@ def _spread_out(
     fixed: np.ndarray,
     half: np.ndarray,
 ) -> None:
-    """Redraw free UAVs in place until no two are closer than ``min_init_spacing``."""
-    N, D = q.shape
-    spacing2 = cfg.min_init_spacing**2
-    # a free UAV is in conflict with any fixed UAV or any earlier UAV
-    earlier = np.tri(N, k=-1, dtype=bool) | fixed[None, :]
-    for _ in range(MAX_PLACEMENT_ROUNDS):
-        d2 = np.sum((q[:, None, :] - q[None, :, :]) ** 2, axis=-1)
-        np.fill_diagonal(d2, np.inf)
-        conflict = np.any((d2 < spacing2) & earlier, axis=1) & ~fixed
-        if not conflict.any():
-            return
-        idx = np.flatnonzero(conflict)
-        q[idx] = rng.uniform(-1.0, 1.0, (idx.size, D)) * half[idx]
-    raise ValueError(
-        f"min_init_spacing={cfg.min_init_spacing!r} is invalid: cannot place "
-        f"n_uavs={N} that far apart in the start box "
-        f"(swarm_half_width={cfg.swarm_half_width})"
-    )
+    """Redraw free UAVs in place until no two are closer than ``min_init_spacing`` (a grid
+    finds the conflicts: O(N) memory and work per round, same draws as an N x N test)."""
+    if not redraw_conflicts(rng, q, half, fixed, cfg.min_init_spacing, MAX_PLACEMENT_ROUNDS):
+        raise ValueError(
+            f"min_init_spacing={cfg.min_init_spacing!r} is invalid: cannot place "
+            f"n_uavs={q.shape[0]} that far apart in the start box "
+            f"(swarm_half_width={cfg.swarm_half_width})"
+        )
 
 
 def pinning_mask(cfg: PairFlockConfig, q: np.ndarray, leader_q: np.ndarray) -> np.ndarray:
@@ -112,8 +106,7 @@ def pinning_mask(cfg: PairFlockConfig, q: np.ndarray, leader_q: np.ndarray) -> n
         h[:] = 1.0
     elif isinstance(pin, int):
         if pin > 0:
-            d = np.linalg.norm(q - leader_q, axis=1)
-            h[np.argsort(d, kind="stable")[:pin]] = 1.0
+            h[nearest_indices(q, leader_q, pin)] = 1.0
     else:
         h[list(pin)] = 1.0
     return h

@@ -28,6 +28,14 @@ UNPAIRED_COLOR = "0.35"
 FRAME_MARGIN_PX = {"left": 70, "right": 20, "bottom": 55, "top": 50}
 #: velocity arrows (Figs. 5, 9, 12): the 90th-percentile speed is drawn this fraction of the view
 ARROW_FRACTION = 0.08
+#: up to this many UAVs markers and arrows keep their size; a larger swarm spreads over more
+#: of the view, so both shrink as sqrt(CROWD_UAVS / N) and the picture stays legible
+CROWD_UAVS = 100
+
+
+def crowd_scale(n_uavs: int) -> float:
+    """Marker and arrow scale for a picture of ``n_uavs`` UAVs (1 up to CROWD_UAVS)."""
+    return min(1.0, math.sqrt(CROWD_UAVS / max(n_uavs, 1)))
 
 
 def triangle_markers(xy: np.ndarray, heading: np.ndarray, size: float) -> np.ndarray:
@@ -81,8 +89,18 @@ class SwarmArtists:
         colors = [UNPAIRED_COLOR] * n_uavs
         for k, (a, b) in enumerate(self.pairs):
             colors[a] = colors[b] = PAIR_COLORS[k % len(PAIR_COLORS)]
+        # a crowded picture draws the paired UAVs last (on top) and at the uncrowded size
+        self._crowd = crowd_scale(n_uavs)
+        self._paired = np.asarray(self.pairs, dtype=np.int64).reshape(-1)
+        self._order = np.arange(n_uavs)
+        if self._crowd < 1.0:
+            rest = np.setdiff1d(self._order, self._paired)
+            self._order = np.concatenate([rest, self._paired])
         self.triangles = PolyCollection(
-            np.zeros((n_uavs, 3, 2)), facecolors=colors, edgecolors="k", linewidths=0.3
+            np.zeros((n_uavs, 3, 2)),
+            facecolors=[colors[i] for i in self._order],
+            edgecolors="k",
+            linewidths=0.3 * self._crowd,
         )
         ax.add_collection(self.triangles, autolim=False)
         # per pair: one circle around the converged pair (the paper's marker), or one around
@@ -135,9 +153,13 @@ class SwarmArtists:
             limits = fit_limits(q, leader_q)
         span = max(limits[1] - limits[0], limits[3] - limits[2])
         if size is None:
-            size = 0.025 * span
+            size = 0.025 * span * crowd_scale(len(q))
         h = _headings(p, headings)
-        self.triangles.set_verts(triangle_markers(xy, h, size))
+        verts = triangle_markers(xy, h, size)
+        if self._crowd < 1.0:
+            pr = self._paired
+            verts[pr] = triangle_markers(xy[pr], h[pr], size / self._crowd)
+        self.triangles.set_verts(verts[self._order])
         for k, (a, b) in enumerate(self.pairs):
             together, ca, cb = self.circles[k]
             close = bool(np.linalg.norm(xy[a] - xy[b]) <= 2 * self.d_m[k])
@@ -179,7 +201,8 @@ def draw_swarm(
         pairs: sequence of (A, B) UAV indices; d_m: one distance per pair.
         leader_q: leader position (dim,) or None.
         headings: previous headings, kept for UAVs at rest.
-        size: triangle length in data units (default: 2.5 % of the view).
+        size: triangle length in data units (default: 2.5 % of the view, times
+            :func:`crowd_scale` for swarms of more than CROWD_UAVS).
         arrows: draw velocity arrows (Figs. 5, 9, 12), length proportional to speed.
         limits: (xmin, xmax, ymin, ymax); default fits every UAV and the leader.
     """
@@ -203,7 +226,7 @@ def draw_swarm(
             width=0.002,
             angles="xy",
             scale_units="xy",
-            scale=ref / (ARROW_FRACTION * span),
+            scale=ref / (ARROW_FRACTION * crowd_scale(len(q)) * span),
         )
     return h
 

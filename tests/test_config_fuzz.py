@@ -345,7 +345,13 @@ def test_memory_and_placement_limits_name_the_field():
     big = dict(n_uavs=1000, pairs=pairs, init="random", swarm_half_width=1e3, pair_corner=1e3)
     with pytest.raises(ValueError, match=r"^partner_delay=100000 is invalid: .*delay buffer"):
         make_config("paper", partner_delay=100_000, **big)
-    with pytest.raises(ValueError, match=r"^n_uavs=100000 is invalid: .*placement memory"):
-        make_config("paper", n_uavs=100_000, swarm_half_width=1e4)
-    # without a minimum spacing the placement builds no N x N arrays
-    assert make_config("paper", n_uavs=100_000, min_init_spacing=0.0).n_uavs == 100_000
+    # the placement is linear in N (a neighbour grid, no N x N arrays): the largest swarm
+    # allowed, spaced apart, stays within the placement memory limit
+    from pairflock_env.config.limits import MAX_PLACEMENT_BYTES, MAX_UAVS
+    from pairflock_env.config.sections.pairs import placement_bytes
+
+    largest = make_config("paper", n_uavs=MAX_UAVS)
+    assert largest.min_init_spacing > 0
+    assert placement_bytes(largest) < MAX_PLACEMENT_BYTES
+    half = largest.replace(n_uavs=MAX_UAVS // 2)
+    assert placement_bytes(largest) <= 2 * placement_bytes(half)  # linear, not quadratic

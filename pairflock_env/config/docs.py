@@ -34,7 +34,8 @@ d_m=4)`, `gymnasium.make("pairflock/PairFlock-v0", dynamics="quadrotor")`, ...),
 attribute (`cfg.n_uavs`). `cfg.section("flocking")` returns one section's values.
 
 The defaults are the paper's values (Sec. VI-A, docs/paper-notes.md): the `paper` preset is
-the defaults, and the `paper-quadrotor` column lists only what that preset changes. `dim` and
+the defaults, and the column of every other preset (`paper-quadrotor`, `large`) lists only
+what that preset changes. `dim` and
 `substeps` follow `dynamics` unless set. An unknown keyword raises `TypeError` with a
 did-you-mean hint; a wrong type `TypeError`; a value outside "valid" `ValueError`; each names
 the field, the value and what is valid. The rules between fields and the derived quantities
@@ -73,12 +74,13 @@ def _default(f: Field) -> str:
     return _code(f.default)
 
 
-def _field_rows(fields: Iterable[Field], preset: Mapping[str, Any] | None) -> list[list[str]]:
+def _field_rows(
+    fields: Iterable[Field], presets: Sequence[Mapping[str, Any]] = ()
+) -> list[list[str]]:
     rows = []
     for f in fields:
         row = [f"`{f.name}`", f.kind.type_name, f.unit, _default(f)]
-        if preset is not None:
-            row.append(_code(preset[f.name]) if f.name in preset else "")
+        row += [_code(pr[f.name]) if f.name in pr else "" for pr in presets]
         row += [_text(f.kind.valid()), _text(f.doc)]
         if f.aliases:
             row[-1] += " Old name: " + ", ".join(f"`{a}`" for a in f.aliases) + " (deprecated)."
@@ -86,12 +88,12 @@ def _field_rows(fields: Iterable[Field], preset: Mapping[str, Any] | None) -> li
     return rows
 
 
-def _sections(schema: Schema, preset: Mapping[str, Any]) -> list[str]:
+def _sections(schema: Schema, presets: Mapping[str, Mapping[str, Any]]) -> list[str]:
     out: list[str] = []
-    head = ["field", "type", "unit", "default (= paper)", "paper-quadrotor", "valid", "meaning"]
+    head = ["field", "type", "unit", "default (= paper)", *presets, "valid", "meaning"]
     for sec in schema.sections:
         out += ["", f"## {sec.title} (`{sec.name}`)", "", _text(sec.doc), ""]
-        out += _table(head, _field_rows(sec.fields, preset))
+        out += _table(head, _field_rows(sec.fields, tuple(presets.values())))
     return out
 
 
@@ -126,13 +128,13 @@ def _frame_params() -> list[str]:
     sec = FRAME_SCHEMA.sections[0]
     out = ["", f"## {sec.title} (`frame_params`)", "", _text(sec.doc), ""]
     head = ["parameter", "type", "unit", "default", "valid", "meaning"]
-    return out + _table(head, _field_rows(sec.fields, None))
+    return out + _table(head, _field_rows(sec.fields))
 
 
 def render() -> str:
     """The whole of ``docs/config.md``."""
     lines = [_HEADER.rstrip("\n")]
-    lines += _sections(SCHEMA, PRESETS["paper-quadrotor"])
+    lines += _sections(SCHEMA, {k: v for k, v in PRESETS.items() if k != "paper"})
     lines += _rules(SCHEMA)
     lines += _limits()
     lines += _frame_params()

@@ -100,9 +100,8 @@ LIMITS: tuple[Limit, ...] = (
         "MAX_PLACEMENT_BYTES",
         MAX_PLACEMENT_BYTES,
         "bytes",
-        "temporaries of the random start placement, which compares all pairs of UAVs at once "
-        "(about N^2 (16 dim + 12) bytes; allows 10^4 UAVs); lift it when the placement no "
-        "longer builds N x N arrays",
+        "temporaries of the random start placement (a neighbour grid, linear in N: far below "
+        "this bound for every n_uavs allowed)",
     ),
     Limit(
         "MAX_START_DENSITY",

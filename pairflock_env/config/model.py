@@ -10,7 +10,7 @@ import numpy as np
 from .schema import Record, Schema, declare_record
 from .sections import DERIVED, RULES, SECTIONS
 from .sections.flocking import repulsion_sigma2
-from .sections.swarm import episode_steps, physics_dt
+from .sections.swarm import episode_steps, physics_dt, uses_grid
 
 __all__ = ["SCHEMA", "ConfigSection", "PairFlockConfig", "field_names"]
 
@@ -73,6 +73,12 @@ class _PairFlockConfigMethods(Record):
     def episode_steps(self) -> int:
         """Control steps per episode (``max_cycles`` or ``round(horizon / dt)``)."""
         return episode_steps(self)
+
+    @property
+    def uses_grid(self) -> bool:
+        """Whether the neighbour search is the grid (``neighbor_search``, "auto" resolved
+        by ``n_uavs``)."""
+        return uses_grid(self)
 
     @property
     def physics_dt(self) -> float:

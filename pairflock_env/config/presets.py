@@ -47,6 +47,14 @@ PRESETS: dict[str, dict[str, Any]] = {
         pair_corner=(10.0, 10.0, 0.0),  # pair at (-10, -10, 20) and (10, 10, 20)
         quad_ground_altitude=0.0,
     ),
+    # A large swarm (docs/large-swarms.md): 1,000 UAVs with 10 pairs drawn anywhere in the
+    # start box (grown with N at the paper's density: +-158 m), the grid search (auto).
+    "large": dict(
+        n_uavs=1000,
+        pairs=tuple((2 * k, 2 * k + 1) for k in range(10)),
+        init="random",
+        pair_corner=150.0,
+    ),
 }
 
 

@@ -80,6 +80,14 @@ SUITES: dict[str, Suite] = {
         ),
         snapshots=False,
     ),
+    "large": Suite(
+        "a large swarm: 1,000 UAVs with 10 pairs drawn anywhere in the start box (preset "
+        "'large', docs/large-swarms.md), sliding mode vs the normal method vs the learned "
+        "policy, 3 seeds",
+        preset="large",
+        policies=("smc", "proportional", "sb3:pair_n20_a50"),
+        seeds=3,
+    ),
     "quadrotor": Suite(
         "Sec. VI-B: 10 quadrotors (preset 'paper-quadrotor', docs/quadrotor.md), 5 seeds",
         preset="paper-quadrotor",

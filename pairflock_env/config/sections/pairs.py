@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ..fields import Box, Choice, Field, Kind, Real, Vector, invalid, sequence_items
+from ..fields import Auto, Box, Choice, Field, Kind, Real, Vector, invalid, sequence_items
 from ..limits import (
     MAX_DISTANCE,
     MAX_GAIN,
@@ -26,7 +26,21 @@ __all__ = [
     "corner_diagonals",
     "placement_bytes",
     "start_density",
+    "start_half_width",
 ]
+
+#: half-width of the start box of the paper (m), kept for swarms of up to START_UAVS UAVs
+START_HALF_WIDTH = 50.0
+START_UAVS = 100
+
+
+def start_half_width(v: Any) -> float:
+    """Default ``swarm_half_width``: the paper's box up to START_UAVS UAVs; larger swarms keep
+    the density of START_UAVS UAVs in it, so the side grows as n_uavs^(1/dim) (500 m for
+    10,000 UAVs in 2-D)."""
+    if v.n_uavs <= START_UAVS:
+        return START_HALF_WIDTH
+    return START_HALF_WIDTH * (v.n_uavs / START_UAVS) ** (1.0 / v.dim)
 
 
 class Pairs(Kind):
@@ -159,12 +173,13 @@ def start_density(v: Any) -> float:
 
 
 def placement_bytes(v: Any) -> int:
-    """Peak bytes of the random start placement's temporaries: the N x N x dim offsets and
-    their squares (float64), the N x N distances (float64) and four N x N masks; 0 when
-    min_init_spacing is 0 (no placement loop)."""
+    """Peak bytes of the random start placement's temporaries: the neighbour grid that finds
+    conflicts (per UAV: its bucket, its slot, about 8 bucket starts and bucket-list entries,
+    int64) plus one redraw of dim float64 per UAV; 0 when min_init_spacing is 0 (no
+    placement loop). Linear in N."""
     if v.min_init_spacing == 0:
         return 0
-    return v.n_uavs**2 * (16 * v.dim + 12)
+    return 8 * v.n_uavs * (v.dim + 12) + 1024
 
 
 def _crowded(v: Any) -> str | None:
@@ -232,10 +247,16 @@ INITIAL_STATE = Section(
         Field(
             "swarm_half_width",
             Box(MAX_POSITION),
-            50.0,
+            START_HALF_WIDTH,
             "m",
             "Unpaired UAVs start uniform in [-w, w]^dim around swarm_center; one number for "
             "every axis or one per axis.",
+            auto=Auto(
+                start_half_width,
+                ("n_uavs", "dim"),
+                f"{START_HALF_WIDTH:g} up to {START_UAVS} UAVs; beyond, the box grows at "
+                f"constant density: {START_HALF_WIDTH:g} (n_uavs / {START_UAVS})^(1/dim)",
+            ),
         ),
         Field(
             "pair_corner",
@@ -293,7 +314,7 @@ DERIVED = (
         0,
         MAX_PLACEMENT_BYTES,
         "bytes",
-        "N^2 (16 dim + 12) while min_init_spacing > 0",
+        "8 N (dim + 12) + 1024 while min_init_spacing > 0",
     ),
     Derived(
         "pair_accel_limit^2",

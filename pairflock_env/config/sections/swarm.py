@@ -10,7 +10,33 @@ from ..fields import Auto, Choice, Field, Int, Kind, OrNone, Real
 from ..limits import MAX_EPISODE_STEPS, MAX_SUBSTEPS, MAX_TIME, MAX_UAVS
 from ..schema import Derived, Rule, Section
 
-__all__ = ["DERIVED", "RULES", "SECTIONS", "episode_steps", "physics_dt", "quad_min_substeps"]
+__all__ = [
+    "DERIVED",
+    "GRID_MIN_UAVS",
+    "RULES",
+    "SECTIONS",
+    "episode_steps",
+    "physics_dt",
+    "quad_min_substeps",
+    "uses_grid",
+]
+
+#: smallest swarm for which neighbor_search="auto" picks the grid. Measured (core step,
+#: UAV-steps/s, grid / all pairs, one thread, CPU time): over rollouts of 20 steps from the
+#: start and the lattice states (``python benchmarks/bench_core.py --cpu-time --quick
+#: --sections threshold``) the grid is 0.68-1.25x at N = 100, 1.09-1.63x at 150, 1.20-1.96x
+#: at 200 and 1.64-2.18x at 250 (B = 1 and 64); free-running from reset, where the swarm
+#: contracts and packs denser, it was 0.75-0.95x at 150, 0.93-1.18x at 200 and 1.36-1.69x
+#: at 300. From 250 UAVs the grid wins in every case measured.
+GRID_MIN_UAVS = 250
+
+
+def uses_grid(v: Any) -> bool:
+    """Whether the neighbour search of config ``v`` is the grid (``neighbor_search``, with
+    "auto" resolved by ``n_uavs``)."""
+    if v.neighbor_search == "auto":
+        return v.n_uavs >= GRID_MIN_UAVS
+    return v.neighbor_search == "grid"
 
 
 class _PresetName(Kind):
@@ -77,6 +103,17 @@ SWARM = Section(
     "How many UAVs fly, which vehicle model, in how many dimensions.",
     (
         Field("n_uavs", Int(2, MAX_UAVS), 50, "UAVs", "Number of UAVs N in each swarm."),
+        Field(
+            "neighbor_search",
+            Choice(("auto", "all_pairs", "grid")),
+            "auto",
+            "",
+            'How each step finds neighbours: "all_pairs" (every pair, O(N^2) per swarm), '
+            '"grid" (a uniform cell list with cells of max(radius, collision_distance), O(N) '
+            'for a flock of bounded density) or "auto" (all pairs up to '
+            f"{GRID_MIN_UAVS - 1} UAVs, the grid from {GRID_MIN_UAVS}: the faster one, "
+            "measured). Both give the same trajectories.",
+        ),
         Field(
             "dynamics",
             Choice(("particle", "quadrotor")),

@@ -1,0 +1,97 @@
+"""The neighbour sweep of one state: every consumer of neighbours served from one search.
+
+:class:`NeighborSweep` owns the search the config asks for (``neighbor_search``: all pairs,
+or a :class:`~pairflock_env.neighbors.NeighborGrid` rebuilt from the positions before each
+sweep) and the output buffers of the two sweeps that read it:
+
+* :func:`~pairflock_env.flocking.flocking_pass`: the flocking command (eqs. 11-19), each
+  UAV's nearest non-partner distance, collisions and the largest connected component;
+* :func:`~pairflock_env.pair_neighbors.pair_pass`: the shared-neighbour count of eq. 28 and
+  each agent's K nearest UAVs (the observation's neighbour slots).
+
+Both paths give the same results (the grid visits the same pairs in the same summation
+order); the grid is O(N) per swarm for a flock of bounded density instead of O(N^2). The
+grid stays available after the sweep (:attr:`NeighborSweep.grid`) for any later stage that
+needs the neighbours of the same state.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .config import PairFlockConfig
+from .flocking import FlockingParams, flocking_pass, pair_pass
+from .neighbors import NeighborGrid
+from .pairing import agent_pair_state
+
+__all__ = ["NeighborSweep", "make_grid"]
+
+
+def make_grid(cfg: PairFlockConfig, num_envs: int) -> NeighborGrid | None:
+    """The grid every sweep of ``cfg`` can use (cells of ``max(radius, collision_distance)``),
+    or ``None`` when ``neighbor_search`` resolves to all pairs."""
+    if not cfg.uses_grid:
+        return None
+    cell = max(cfg.radius, cfg.collision_distance)
+    return NeighborGrid(num_envs, cfg.n_uavs, cfg.dim, cell_size=cell)
+
+
+class NeighborSweep:
+    """The sweeps of B swarms of one config, with their buffers and (optionally) a grid.
+
+    Args:
+        cfg: the configuration (pairs, radius, obs_neighbors, neighbor_search ...).
+        num_envs: number of swarms B.
+        params: the flocking parameters of ``cfg``.
+        partner_of: (N,) partner UAV of each UAV, or -1.
+    """
+
+    def __init__(
+        self,
+        cfg: PairFlockConfig,
+        num_envs: int,
+        params: FlockingParams,
+        partner_of: np.ndarray,
+    ) -> None:
+        pairs = np.asarray(cfg.pairs, dtype=np.int64)
+        self.cfg = cfg
+        self.params = params
+        self.partner_of = partner_of
+        self.agent_uavs = pairs.reshape(-1).copy()
+        self.partner_uavs = pairs[:, ::-1].reshape(-1).copy()
+        self.agent_pair = np.repeat(np.arange(len(pairs)), 2)
+        self.agent_dm = cfg.d_m_array[self.agent_pair]
+        self.grid = make_grid(cfg, num_envs)
+        self.flock_out: dict[str, np.ndarray] | None = None
+        self.pair_out: dict[str, np.ndarray] | None = None
+
+    def run(
+        self,
+        q: np.ndarray,
+        p: np.ndarray,
+        leader_q: np.ndarray,
+        leader_p: np.ndarray,
+        pinned: np.ndarray,
+    ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+        """Sweep the state q, p (B, N, dim) with the leader at ``leader_q``, ``leader_p``.
+
+        Returns the flocking outputs (:func:`~pairflock_env.flocking.flocking_pass`) and the
+        agents' pair quantities (B, M): those of
+        :func:`~pairflock_env.pairing.agent_pair_state`, plus ``min_separation`` (distance to
+        the nearest non-partner UAV, m) and ``shared_neighbors`` (eq. 28). The observation's
+        neighbour slots are in :attr:`pair_out`.
+        """
+        cfg, g = self.cfg, self.grid
+        ia, ip = self.agent_uavs, self.partner_uavs
+        if g is not None:
+            g.build(q)
+        fl = self.flock_out = flocking_pass(
+            self.params, q, p, leader_q, leader_p, pinned, self.partner_of, self.flock_out, g
+        )
+        pp = self.pair_out = pair_pass(
+            q, p, ia, ip, cfg.radius, cfg.obs_neighbors, out=self.pair_out, grid=g
+        )
+        pair = agent_pair_state(q, p, ia, ip, self.agent_dm, cfg.surface_slope)
+        pair["min_separation"] = np.sqrt(fl["min_d2"][:, ia])
+        pair["shared_neighbors"] = pp["shared"][:, self.agent_pair]
+        return fl, pair
