@@ -89,18 +89,23 @@ def _policy_checks(rows, name: str, c: QuadrotorCriteria) -> list[tuple[str, boo
             f"{int(crashed.sum())} crashes",
         ),
     ]
+    return out + _attitude_cost(rows, name, quad, s, c)
+
+
+def _attitude_cost(rows, name: str, quad: list, s: np.ndarray, c: QuadrotorCriteria) -> list:
+    """Quadrotor minus particle straight-flight max error, same seeds (none without them)."""
     part = {r["seed"]: r for r in _runs(rows, "particle", name)}
-    if part and all(r["seed"] in part for r in quad):
-        cost = s - np.array([float(part[r["seed"]]["straight_max_error"]) for r in quad])
-        out.append(
-            (
-                f"{name}: attitude loop costs <= {c.attitude_cost} m over the particle "
-                "(straight-flight max error, same seed)",
-                bool(np.all(cost <= c.attitude_cost)),
-                f"{np.min(cost):+.3f} to {np.max(cost):+.3f} m",
-            )
+    if not part or not all(r["seed"] in part for r in quad):
+        return []
+    cost = s - np.array([float(part[r["seed"]]["straight_max_error"]) for r in quad])
+    return [
+        (
+            f"{name}: attitude loop costs <= {c.attitude_cost} m over the particle "
+            "(straight-flight max error, same seed)",
+            bool(np.all(cost <= c.attitude_cost)),
+            f"{np.min(cost):+.3f} to {np.max(cost):+.3f} m",
         )
-    return out
+    ]
 
 
 def check_quadrotor(
