@@ -147,7 +147,11 @@ def test_stored_model_configs_load_to_the_same_values(tmp_path):
             for k, v in stored.items()
         }
         assert cfg.to_dict() == renamed
-        assert make_config(meta["settings"]["preset"], **meta["settings"]["env"]) == cfg
+        settings = meta["settings"]
+        task = dict(settings["env"])
+        if settings.get("dynamics") is not None:  # a run's dynamics key (e.g. pair_quad3d)
+            task["dynamics"] = settings["dynamics"]
+        assert make_config(settings["preset"], **task) == cfg
 
 
 def test_values_are_normalised():
