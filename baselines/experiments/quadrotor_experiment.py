@@ -2,6 +2,7 @@
 
     python -m baselines.quadrotor_experiment                # 10 seeds, smc/proportional/zero
     python -m baselines.quadrotor_experiment --check        # also verify the Sec. VI-B criteria
+    python -m baselines.quadrotor_experiment --policies smc sb3:pair_quad3d   # a learned policy
 
 Runs the ``paper-quadrotor`` preset (docs/quadrotor.md): 10 quadrotors, one pair starting
 28 m apart, the virtual leader at 5 m/s climbing for 20 s and turning left by 90 degrees
@@ -44,6 +45,7 @@ __all__ = [
     "SUMMARY_COLUMNS",
     "build_parser",
     "check_criteria",
+    "criteria_policies",
     "main",
     "run_job",
     "scenario_metrics",
@@ -52,7 +54,7 @@ __all__ = [
 
 #: the Sec. VI-B thresholds (defined in :mod:`baselines.reporting.criteria`), as a dict
 CRITERIA = dataclasses.asdict(QUADROTOR)
-#: the criteria for sliding mode on the quadrotor, every seed
+#: the Sec. VI-B criteria on the quadrotor, every seed (sliding mode unless told otherwise)
 check_criteria = check_quadrotor
 PROG = "python -m baselines.quadrotor_experiment"
 
@@ -110,7 +112,8 @@ def _run_options(p: argparse.ArgumentParser) -> None:
         "--policies",
         nargs="+",
         default=["smc", "proportional", "zero"],
-        help="pair controllers (names for baselines.make_pair_policy)",
+        help="pair controllers (names for baselines.make_pair_policy: smc, proportional, "
+        "zero, sb3:<model path or packaged name>)",
     )
     p.add_argument(
         "--dynamics",
@@ -166,6 +169,14 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="verify the Sec. VI-B criteria (exit status 1 if any fails or none applies)",
     )
+    p.add_argument(
+        "--criteria-for",
+        nargs="+",
+        default=None,
+        metavar="POLICY",
+        help="controllers the Sec. VI-B criteria are checked for (default: smc and every "
+        "learned sb3: policy run)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
 
@@ -200,7 +211,36 @@ def _settings(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, dict[
             gains[policy][gain] = value
     if args.kp is not None:
         gains["proportional"]["k_p"] = args.kp
+    _check_policies(args, overrides, gains)
     return overrides, gains
+
+
+def _check_policies(args: argparse.Namespace, overrides, gains) -> None:
+    """Build every controller once per vehicle model here, so that a missing model file or a
+    model trained for another observation (e.g. a 2-D one) exits naming it, before any run."""
+    from baselines.controllers import make_pair_policy
+    from pairflock_env import make_config
+
+    for name in criteria_policies(args):
+        if name not in args.policies:
+            raise SystemExit(
+                f"--criteria-for {name!r} is invalid: not among --policies "
+                f"({', '.join(args.policies)})"
+            )
+    for pol in (p for p in args.policies if ":" in p):
+        for dyn in args.dynamics:
+            try:
+                make_pair_policy(pol, make_config(PRESET, dynamics=dyn, **overrides))
+            except (TypeError, ValueError, FileNotFoundError) as exc:
+                raise SystemExit(f"--policies {pol!r} is invalid for {dyn}: {exc}") from None
+
+
+def criteria_policies(args: argparse.Namespace) -> list[str]:
+    """The controllers the criteria are checked for: ``--criteria-for``, else smc and every
+    learned (``sb3:``) policy among ``--policies``."""
+    if args.criteria_for is not None:
+        return list(dict.fromkeys(args.criteria_for))
+    return [p for p in args.policies if p == "smc" or p.startswith("sb3:")]
 
 
 def _run(args, seeds, overrides, gains) -> dict[tuple[str, str], dict[str, Any]]:
@@ -220,7 +260,7 @@ def _run(args, seeds, overrides, gains) -> dict[tuple[str, str], dict[str, Any]]
     return results
 
 
-def _summary(rows, results, keys, seeds, overrides, gains, checks) -> str:
+def _summary(rows, results, keys, seeds, overrides, gains, checks, checked) -> str:
     from baselines.reporting.criteria import criteria_table
 
     cfg = results[keys[0]]["config"]
@@ -236,7 +276,8 @@ def _summary(rows, results, keys, seeds, overrides, gains, checks) -> str:
     if overrides or any(gains.values()):
         md += [f"Overrides: `{overrides}`; gains: `{gains}`.", ""]
     if checks:
-        md += ["## Criteria (sliding mode on the quadrotor, every seed)", ""]
+        who = "sliding mode" if checked == ["smc"] else ", ".join(f"`{p}`" for p in checked)
+        md += [f"## Criteria ({who} on the quadrotor, every seed)", ""]
         md += criteria_table(checks)
     return "\n".join(md) + "\n"
 
@@ -279,10 +320,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     keys = sorted(results, key=_order)
     rows = [r for k in keys for r in results[k]["rows"]]
     out = args.out
-    checks = check_quadrotor(rows)
+    checked = criteria_policies(args)
+    checks = check_quadrotor(rows, policies=checked)
     with result_folder(out) as folder:  # complete and consistent, or marked INCOMPLETE
         write_csv(folder / "results.csv", rows, list(rows[0]))
-        md = _summary(rows, results, keys, seeds, overrides, gains, checks)
+        md = _summary(rows, results, keys, seeds, overrides, gains, checks, checked)
         atomic_write_text(folder / "summary.md", md)
         fig_paths = []
         if not args.no_figures:

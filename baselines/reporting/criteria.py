@@ -3,7 +3,8 @@
 * :data:`PAPER` - the Sec. VI-A reproduction (particle swarm, ``python -m
   baselines.reproduce --check``; docs/benchmark.md);
 * :data:`QUADROTOR` - the Sec. VI-B experiment (``python -m baselines.quadrotor_experiment
-  --check``; docs/quadrotor.md);
+  --check``; docs/quadrotor.md), for sliding mode or any other pair controller (defined in
+  :mod:`baselines.reporting.quadrotor_criteria`);
 * :data:`LEARNED` - the trained pair policy (``python -m train.evaluate --check``, and the
   score training keeps its best model by; docs/learning.md);
 * :data:`GENERALIST` - the safe generalist pair policy of docs/safety.md, on every evaluated
@@ -23,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from .quadrotor_criteria import QUADROTOR, QuadrotorCriteria, check_quadrotor
 from .tables import md_escape, stat_cell
 
 __all__ = [
@@ -62,19 +64,6 @@ class PaperCriteria:
 
 
 @dataclasses.dataclass(frozen=True)
-class QuadrotorCriteria:
-    """Sec. VI-B, sliding mode on the quadrotor, every seed (times in s, distances in m)."""
-
-    band: float = 0.5  # |pair error| band
-    band_entry_by: float = 10.0  # first in the band by this time
-    straight_max: float = 0.5  # max |error| in straight flight
-    turn_peak_max: float = 0.6  # peak |error| in and after the turns
-    min_distance: float = 0.5  # no two UAVs closer than this
-    velocity_tolerance: float = 0.6  # m/s: unpaired UAVs' speed error to the leader
-    attitude_cost: float = 0.35  # quadrotor minus particle straight-flight max error
-
-
-@dataclasses.dataclass(frozen=True)
 class LearnedTargets:
     """Targets of a learned pair policy per (N, start) (distances in m, times in s); the
     defaults are those of the N = 20, corners policy (:data:`LEARNED`)."""
@@ -89,7 +78,6 @@ class LearnedTargets:
 
 
 PAPER = PaperCriteria()
-QUADROTOR = QuadrotorCriteria()
 LEARNED = LearnedTargets()
 #: the safe generalist (docs/safety.md): every N in 20-100, both starts, filter on
 GENERALIST = LearnedTargets(
@@ -190,77 +178,6 @@ def check_paper_claims(
                     f"min {np.min(z):.1f} m",
                 )
             )
-    return out
-
-
-# --------------------------------------------------------------------------- Sec. VI-B
-def _range_s(v: np.ndarray) -> str:
-    return f"{np.nanmin(v):.2f}-{np.nanmax(v):.2f} s" if np.isfinite(v).any() else "never"
-
-
-def check_quadrotor(
-    rows: Sequence[Mapping[str, Any]], criteria: QuadrotorCriteria = QUADROTOR
-) -> list[Check]:
-    """The Sec. VI-B criteria for sliding mode on the quadrotor, every seed; the rows are
-    those of :func:`baselines.experiments.quadrotor_runs.run_job` (both vehicle models)."""
-    c = criteria
-    smc = sorted(
-        (r for r in rows if r["dynamics"] == "quadrotor" and r["policy"] == "smc"),
-        key=lambda r: r["seed"],
-    )
-    if not smc:
-        return []
-
-    def arr(key: str) -> np.ndarray:
-        return np.array([float(r[key]) for r in smc])
-
-    entry, s, tp = arr("band_entry_time"), arr("straight_max_error"), arr("turn_peak_error")
-    md, vm, crashed = arr("min_distance"), arr("velocity_mismatch"), arr("crashed")
-    full_length = np.all(arr("steps_run") == smc[0]["steps_run"])
-    out = [
-        (
-            f"smc: first in the {c.band} m band within {c.band_entry_by:g} s",
-            bool(np.all(entry <= c.band_entry_by)),
-            _range_s(entry),
-        ),
-        (
-            f"smc: max abs pair error <= {c.straight_max} m in [15,20], [27,50], [57,65] s",
-            bool(np.all(s <= c.straight_max)),
-            f"max {np.max(s):.3f} m",
-        ),
-        (
-            f"smc: peak abs pair error in the turns <= {c.turn_peak_max} m",
-            bool(np.all(tp <= c.turn_peak_max)),
-            f"max {np.max(tp):.3f} m",
-        ),
-        (
-            f"smc: no two UAVs closer than {c.min_distance} m",
-            bool(np.all(md >= c.min_distance)),
-            f"min {np.min(md):.2f} m",
-        ),
-        (
-            f"smc: unpaired velocity within {c.velocity_tolerance} m/s of the leader "
-            "in [35,50], [60,65] s",
-            bool(np.all(vm <= c.velocity_tolerance)),
-            f"max {np.max(vm):.3f} m/s",
-        ),
-        (
-            "smc: no crash, every episode runs 65 s",
-            bool(np.all(crashed == 0) and full_length),
-            f"{int(crashed.sum())} crashes",
-        ),
-    ]
-    part = {r["seed"]: r for r in rows if r["dynamics"] == "particle" and r["policy"] == "smc"}
-    if part and all(r["seed"] in part for r in smc):
-        cost = s - np.array([float(part[r["seed"]]["straight_max_error"]) for r in smc])
-        out.append(
-            (
-                f"smc: attitude loop costs <= {c.attitude_cost} m over the particle "
-                "(straight-flight max error, same seed)",
-                bool(np.all(cost <= c.attitude_cost)),
-                f"{np.min(cost):+.3f} to {np.max(cost):+.3f} m",
-            )
-        )
     return out
 
 
