@@ -96,3 +96,20 @@ def test_eval_targets_setting_is_validated_and_selects_the_score():
     assert score_function(s)(summary) == pytest.approx(1.0 + 0.02)
     assert score_function(RunSettings())(summary) == pytest.approx(0.02)
     assert "eval_targets" not in RunSettings().to_dict()  # old runs store what they stored
+
+
+def test_sweep_aims_judge_by_the_runs_targets():
+    from types import SimpleNamespace
+
+    from train.sweep_trial import aims
+
+    cfg = SimpleNamespace(n_uavs=50, init="random")
+    rows = [
+        {k: v for k, v in r.items() if k not in ("policy", "n_uavs", "init")}
+        for r in _good(50, "random")
+    ]
+    learned = aims(rows, cfg)
+    strict = aims(rows, cfg, GENERALIST)
+    assert [a["criterion"] for a in learned][-1].endswith("(aim)") and len(learned) == 4
+    assert len(strict) == 6 and all(a["met"] for a in strict)
+    assert any("0.01 m" in a["criterion"] for a in strict)

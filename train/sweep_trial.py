@@ -112,31 +112,37 @@ def _final_rows(run_dir: Path, settings) -> tuple[dict[str, list[dict[str, Any]]
     return rows, cfgs
 
 
-def aims(rows: list[dict[str, Any]], cfg: Any) -> list[dict[str, Any]]:
+def aims(rows: list[dict[str, Any]], cfg: Any, targets: Any = None) -> list[dict[str, Any]]:
     """Which of the project's acceptance aims the evaluation ``rows`` meet.
 
-    The thresholds are the project's (``train.evaluate.acceptance``), judged at the
-    evaluation task's swarm size and start; each entry is ``{criterion, met, measured}``,
-    with the criterion's task prefix (``N=20 corners:``) dropped so that settings share names.
+    The thresholds are the project's (``train.evaluate.acceptance``; ``targets``, default
+    ``LEARNED``, e.g. a run's ``eval_targets``), judged at the evaluation task's swarm size
+    and start; each entry is ``{criterion, met, measured}``, with the criterion's task prefix
+    (``N=20 corners:``) dropped so that settings share names.
     """
+    from baselines.reporting.criteria import LEARNED
+
     from .evaluate import acceptance
 
     tagged = [{**r, "policy": "learned", "n_uavs": cfg.n_uavs, "init": cfg.init} for r in rows]
     out = []
-    for criterion, ok, measured in acceptance(tagged, n_uavs=cfg.n_uavs, init=cfg.init):
+    checks = acceptance(tagged, n_uavs=cfg.n_uavs, init=cfg.init, targets=targets or LEARNED)
+    for criterion, ok, measured in checks:
         out.append(
             {"criterion": criterion.split(": ", 1)[-1], "met": bool(ok), "measured": measured}
         )
     return out
 
 
-def task_aims(rows: dict[str, list[dict[str, Any]]], cfgs: dict[str, Any]) -> list[dict]:
+def task_aims(
+    rows: dict[str, list[dict[str, Any]]], cfgs: dict[str, Any], targets: Any = None
+) -> list[dict]:
     """:func:`aims` of every evaluation task, named ``<task>: <criterion>``, then
     ``every task: <criterion>`` (met when every task meets it); one task (the name ""):
     :func:`aims` of its rows, unchanged."""
     if list(rows) == [""]:
-        return aims(rows[""], cfgs[""])
-    per = {name: aims(r, cfgs[name]) for name, r in rows.items()}
+        return aims(rows[""], cfgs[""], targets)
+    per = {name: aims(r, cfgs[name], targets) for name, r in rows.items()}
     out = [{**a, "criterion": f"{name}: {a['criterion']}"} for name, s in per.items() for a in s]
     for criterion in dict.fromkeys(a["criterion"] for s in per.values() for a in s):
         missed = [
@@ -163,6 +169,7 @@ def _read_curve(run_dir: Path) -> list[dict[str, float]]:
 def collect(trial: Trial, run_dir: Path, settings) -> dict[str, Any]:
     """The result of a trained trial (see the module docstring)."""
     from baselines.evaluation.io import write_csv
+    from baselines.reporting.criteria import TARGETS
 
     from .mix_eval import score_function, tagged_rows
     from .tasks import is_mix
@@ -189,7 +196,7 @@ def collect(trial: Trial, run_dir: Path, settings) -> dict[str, Any]:
         "final": final,
         "best": best.get("summary", {}),
         "best_step": best.get("step"),
-        "aims": task_aims(rows, cfgs),
+        "aims": task_aims(rows, cfgs, TARGETS[settings.eval_targets]),
         "curve": _read_curve(run_dir),
         **tasks,
         # the longest evaluation episode: what a never-reached band time counts as
