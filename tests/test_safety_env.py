@@ -220,3 +220,17 @@ def test_benchmark_safety_suite_runs_filter_off_and_on(tmp_path):
         (tmp_path / "plain").mkdir()
         (tmp_path / "plain" / "results.csv").write_text("scenario,policy\nx,smc\n")
         read_rows([tmp_path / "plain"])
+
+
+def test_benchmark_set_safety_filter_adds_the_safety_columns_to_every_run():
+    from baselines.experiments.benchmark.cli import build_parser, resolve
+
+    parser = build_parser()
+    args = parser.parse_args(["--suite", "quick", "--set", "safety_filter=none,cbf"])
+    plan = resolve(args, parser)
+    assert [c.safety_filter for c in plan.configs] == ["none", "cbf"]
+    assert plan.metric_kwargs.get("safety_metrics") is True
+    args = parser.parse_args(["--suite", "quick"])
+    assert "safety_metrics" not in resolve(args, parser).metric_kwargs
+    args = parser.parse_args(["--suite", "safety"])
+    assert resolve(args, parser).seeds[0] == 30000  # the suite's held-out seeds
