@@ -152,11 +152,18 @@ def test_stored_model_configs_load_to_the_same_values(tmp_path):
         assert {k: now[k] for k in renamed} == renamed
         # fields added since the model was stored take their defaults (today's behaviour)
         assert all(now[k] == SCHEMA.fields[k].default for k in set(now) - set(renamed))
-        settings = meta["settings"]
-        task = dict(settings["env"])
-        if settings.get("dynamics") is not None:  # a run's dynamics key (e.g. pair_quad3d)
-            task["dynamics"] = settings["dynamics"]
-        assert make_config(settings["preset"], **task) == cfg
+        # the run's own task resolution (dynamics key, a task mix's first task) rebuilds it
+        from train.settings import RunSettings
+        from train.tasks import training_tasks
+
+        run = RunSettings.from_dict(meta["settings"])
+        tasks = training_tasks(run)
+        rebuilt = (
+            tasks[0].config(run.preset)
+            if tasks
+            else make_config(run.preset, **run.config_overrides())
+        )
+        assert rebuilt == cfg, path.name
 
 
 def test_values_are_normalised():
