@@ -177,6 +177,9 @@ class LearningInterface:
     name: str = ""
     #: control steps a policy action is held (the policy period is decision_period * dt)
     decision_period: int = 1
+    #: True when :meth:`decode` returns a checked action unchanged and :meth:`reward` the
+    #: core's reward (the views then skip both)
+    passes_through: bool = False
 
     def __init__(self, config: PairFlockConfig) -> None:
         if not isinstance(config, PairFlockConfig):
@@ -251,6 +254,7 @@ class WorldInterface(LearningInterface):
     """The identity: the env's observation, action and reward, unchanged."""
 
     name = "world"
+    passes_through = True
 
     def __init__(self, config: PairFlockConfig, decision_period: int = 1) -> None:
         super().__init__(config)
@@ -282,7 +286,7 @@ class WorldInterface(LearningInterface):
         observation noise beyond ``NOISE_SIGMAS`` standard deviations is ever clipped)."""
         obs = self._check_obs_shape(obs)
         low, high = self._box()
-        return np.clip(obs.astype(np.float32, copy=False), low, high)
+        return obs.astype(np.float32, copy=False).clip(low, high)  # np.clip, less overhead
 
     def decode(self, obs: np.ndarray, action: np.ndarray) -> np.ndarray:
         return self._check_action(action, self._check_obs_shape(obs).shape[:-1])

@@ -181,6 +181,12 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         self.possible_agents = [agent_name(i) for i in self.core.agent_uavs]
         self.agents: list[str] = []
         self._agent_index = {a: m for m, a in enumerate(self.possible_agents)}
+        self._action_names = {a: f"action of {a}" for a in self.possible_agents}
+        # the infos every step adds to each agent's own
+        self._agent_consts = [
+            {"uav_index": int(a), "partner_index": int(b)}
+            for a, b in zip(self.core.agent_uavs, self.core.partner_uavs, strict=True)
+        ]
         self.partners = {
             agent_name(int(a)): agent_name(int(b))
             for a, b in zip(self.core.agent_uavs, self.core.partner_uavs, strict=True)
@@ -196,7 +202,7 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         self.state_space = spaces.Box(*state_bounds(cfg), dtype=np.float32)
         self.physical_obs: np.ndarray | None = None
         self._frames = SwarmFrames(self.core, render_mode)
-        self._title: str | None = None
+        self._title_values: tuple[float, float] | None = None  # of the render title
 
     # PettingZoo requires the same object on every call
     def observation_space(self, agent: str) -> spaces.Box:
@@ -256,9 +262,13 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         missing = [a for a in self.agents if a not in actions]
         if missing:
             raise ValueError(f"missing action for agent(s) {missing}; every live agent must act")
-        out = np.empty((1, len(self.possible_agents), self.config.dim))
-        for a, m in self._agent_index.items():
-            out[0, m] = self.check_action(a, actions[a])
+        shape = (self.config.dim,)
+        out = np.empty((1, len(self.possible_agents), *shape))
+        live = self.agents
+        for a, m in self._agent_index.items():  # check_action, without repeating its lookups
+            if a not in live:
+                raise RuntimeError(f"agent {a!r} is done; call reset()")
+            out[0, m] = check_policy_actions(actions[a], shape, self._action_names[a])
         return out
 
     def step(self, actions: Mapping[str, Any]):
@@ -290,20 +300,24 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         return {a: enc[m] for m, a in enumerate(self.possible_agents)}
 
     def _infos(self, info: dict[str, np.ndarray]) -> dict[str, dict[str, Any]]:
-        # (B,) arrays are swarm-level, (B, M) arrays per agent, (B, ...) anything else
-        swarm = {k: v[0].item() for k, v in info.items() if v.ndim == 1}
-        per_agent = {k: v[0].tolist() for k, v in info.items() if v.ndim == 2}
+        # (B,) arrays are swarm-level, (B, M) arrays per agent, (B, ...) anything else; each
+        # agent's dict: its per-agent values, then the swarm's, then its UAV indices
+        keys, columns, swarm = [], [], {}
+        for k, v in info.items():
+            if v.ndim == 2:
+                keys.append(k)
+                columns.append(v[0].tolist())
+            elif v.ndim == 1:
+                swarm[k] = v[0].item()
         out = {}
-        for m, a in enumerate(self.possible_agents):
-            d = {k: v[m] for k, v in per_agent.items()}
+        rows = zip(*columns, strict=True) if columns else ((),) * len(self.possible_agents)
+        for a, row, consts in zip(self.possible_agents, rows, self._agent_consts, strict=True):
+            d = dict(zip(keys, row, strict=True))
             d.update(swarm)
-            d["uav_index"] = int(self.core.agent_uavs[m])
-            d["partner_index"] = int(self.core.partner_uavs[m])
+            d.update(consts)
             out[a] = d
         first = out[self.possible_agents[0]]
-        self._title = (
-            f"t = {first['sim_time']:.2f} s   pair distance = {first['pair_distance']:.2f} m"
-        )
+        self._title_values = (first["sim_time"], first["pair_distance"])
         return out
 
     def state(self) -> np.ndarray:
@@ -318,7 +332,11 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
 
     def render(self):
         """The swarm as an RGB array (``render_mode="rgb_array"``) or in a window."""
-        return self._frames.render(0, self._title)
+        title = None
+        if self._title_values is not None:
+            t, dist = self._title_values
+            title = f"t = {t:.2f} s   pair distance = {dist:.2f} m"
+        return self._frames.render(0, title)
 
     def close(self) -> None:
         """Release the renderer; the env cannot be reset or stepped afterwards."""
