@@ -70,7 +70,8 @@ def agent_pair_state(
     qa, pa = q[:, agent_uavs], p[:, agent_uavs]
     off = q[:, partner_uavs] - qa
     vel = p[:, partner_uavs] - pa
-    dist = np.sqrt(np.einsum("bmk,bmk->bm", off, off))
+    yy = _dot(off, off)  # once for the distance and eq. 24 (the same numbers either way)
+    dist = np.sqrt(yy)
     return {
         "q": qa,
         "p": pa,
@@ -78,5 +79,6 @@ def agent_pair_state(
         "velocity": vel,
         "pair_distance": dist,
         "pair_error": dist - d_m,
-        "sliding_surface": sliding_surface(off, vel, d_m, c),
+        # sliding_surface(off, vel, d_m, c) with y.y reused: c (y.y - d_m^2) + 2 y.y'
+        "sliding_surface": c * (yy - np.square(d_m)) + 2.0 * _dot(off, vel),
     }

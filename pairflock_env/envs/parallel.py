@@ -29,6 +29,10 @@ from ._common import (
 __all__ = ["PairFlockParallelEnv", "agent_name", "env", "parallel_env", "raw_env"]
 
 
+#: dtypes that real_array takes as they are (real, at most 64 bits): copied into float64 exactly
+_PLAIN = dict.fromkeys(np.typecodes["Float"][:-1] + np.typecodes["AllInteger"], True)
+
+
 def agent_name(uav_index: int) -> str:
     """The agent name of UAV ``uav_index``: ``"uav_<i>"``."""
     return f"uav_{uav_index}"
@@ -247,7 +251,7 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
             raise ValueError(f"unknown agent {agent!r}; agents are {self.possible_agents}")
         if agent not in self.agents:
             raise RuntimeError(f"agent {agent!r} is done; call reset()")
-        return check_policy_actions(action, (self.config.dim,), f"action of {agent}")
+        return check_policy_actions(action, (self.config.dim,), self._action_names[agent])
 
     def _check_action_dict(self, actions: Any) -> np.ndarray:
         if not isinstance(actions, Mapping):
@@ -262,10 +266,18 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         missing = [a for a in self.agents if a not in actions]
         if missing:
             raise ValueError(f"missing action for agent(s) {missing}; every live agent must act")
-        shape = (self.config.dim,)
+        live, shape = self.agents, (self.config.dim,)
         out = np.empty((1, len(self.possible_agents), *shape))
-        live = self.agents
-        for a, m in self._agent_index.items():  # check_action, without repeating its lookups
+        for a, m in self._agent_index.items():  # the usual case: real ndarrays, one check
+            x = actions[a] if a in live else None
+            if not (type(x) is np.ndarray and x.shape == shape and _PLAIN.get(x.dtype.char)):
+                break
+            out[0, m] = x
+        else:
+            if np.isfinite(out).all():
+                return out
+        # anything else: check_action's per-agent conversion and first error, in agent order
+        for a, m in self._agent_index.items():
             if a not in live:
                 raise RuntimeError(f"agent {a!r} is done; call reset()")
             out[0, m] = check_policy_actions(actions[a], shape, self._action_names[a])
@@ -296,8 +308,7 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
     def _emit(self, phys: np.ndarray):
         """Observations of swarm 0 by agent; keeps the physical observation."""
         self.physical_obs = phys[0]
-        enc = self.interface.encode(phys[0])
-        return {a: enc[m] for m, a in enumerate(self.possible_agents)}
+        return dict(zip(self.possible_agents, self.interface.encode(phys[0]), strict=True))
 
     def _infos(self, info: dict[str, np.ndarray]) -> dict[str, dict[str, Any]]:
         # (B,) arrays are swarm-level, (B, M) arrays per agent, (B, ...) anything else; each
@@ -306,9 +317,9 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         for k, v in info.items():
             if v.ndim == 2:
                 keys.append(k)
-                columns.append(v[0].tolist())
+                columns.append(v.tolist()[0])
             elif v.ndim == 1:
-                swarm[k] = v[0].item()
+                swarm[k] = v.item(0)
         out = {}
         rows = zip(*columns, strict=True) if columns else ((),) * len(self.possible_agents)
         for a, row, consts in zip(self.possible_agents, rows, self._agent_consts, strict=True):
