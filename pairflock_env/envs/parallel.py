@@ -254,7 +254,7 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         return check_policy_actions(action, (self.config.dim,), self._action_names[agent])
 
     def _check_action_dict(self, actions: Any) -> np.ndarray:
-        if not isinstance(actions, Mapping):
+        if type(actions) is not dict and not isinstance(actions, Mapping):
             raise TypeError(
                 f"actions must be a dict {{agent: action}}, got {type(actions).__name__}"
             )
@@ -293,9 +293,9 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         res = held_step(self.core, self.interface, self.physical_obs[None], a)
         agents = self.possible_agents
         obs = self._emit(res.obs)
-        rewards = dict(zip(agents, res.reward[0].tolist(), strict=True))
-        term = bool(res.terminated[0])
-        trunc = bool(res.truncated[0])
+        rewards = dict(zip(agents, res.reward.tolist()[0], strict=True))
+        term = res.terminated.item(0)  # a Python bool
+        trunc = res.truncated.item(0)
         terminations = dict.fromkeys(agents, term)
         truncations = dict.fromkeys(agents, trunc)
         infos = self._infos(res.info)
