@@ -186,6 +186,7 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         self.agents: list[str] = []
         self._agent_index = {a: m for m, a in enumerate(self.possible_agents)}
         self._action_names = {a: f"action of {a}" for a in self.possible_agents}
+        self._action_shape = (cfg.dim,)
         # the infos every step adds to each agent's own
         self._agent_consts = [
             {"uav_index": int(a), "partner_index": int(b)}
@@ -251,7 +252,12 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
             raise ValueError(f"unknown agent {agent!r}; agents are {self.possible_agents}")
         if agent not in self.agents:
             raise RuntimeError(f"agent {agent!r} is done; call reset()")
-        return check_policy_actions(action, (self.config.dim,), self._action_names[agent])
+        shape = self._action_shape
+        x = action  # the usual case inline (what real_array does with it); anything else below
+        plain = type(x) is np.ndarray and x.shape == shape and _PLAIN.get(x.dtype.char)
+        if plain and np.isfinite(x).all():
+            return x.astype(np.float64, copy=False)
+        return check_policy_actions(action, shape, self._action_names[agent])
 
     def _check_action_dict(self, actions: Any) -> np.ndarray:
         if type(actions) is not dict and not isinstance(actions, Mapping):
@@ -266,7 +272,7 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         missing = [a for a in self.agents if a not in actions]
         if missing:
             raise ValueError(f"missing action for agent(s) {missing}; every live agent must act")
-        live, shape = self.agents, (self.config.dim,)
+        live, shape = self.agents, self._action_shape
         out = np.empty((1, len(self.possible_agents), *shape))
         for a, m in self._agent_index.items():  # the usual case: real ndarrays, one check
             x = actions[a] if a in live else None
