@@ -110,6 +110,11 @@ from .spaces import (
     separation_bound,
 )
 
+try:  # the ufunc np.clip ends in for float arrays with both bounds, without ~1 us of dispatch
+    from numpy._core.umath import clip as _clip
+except ImportError:  # pragma: no cover - another numpy layout
+    _clip = np.clip
+
 __all__ = [
     "INTERFACES",
     "LearningInterface",
@@ -181,6 +186,9 @@ class LearningInterface:
     name: str = ""
     #: control steps a policy action is held (the policy period is decision_period * dt)
     decision_period: int = 1
+    #: True when :meth:`decode` returns a checked action unchanged and :meth:`reward` the
+    #: core's reward (the views then skip both)
+    passes_through: bool = False
 
     def __init__(self, config: PairFlockConfig) -> None:
         if not isinstance(config, PairFlockConfig):
@@ -255,6 +263,7 @@ class WorldInterface(LearningInterface):
     """The identity: the env's observation, action and reward, unchanged."""
 
     name = "world"
+    passes_through = True
 
     def __init__(self, config: PairFlockConfig, decision_period: int = 1) -> None:
         super().__init__(config)
@@ -286,7 +295,7 @@ class WorldInterface(LearningInterface):
         observation noise beyond ``NOISE_SIGMAS`` standard deviations is ever clipped)."""
         obs = self._check_obs_shape(obs)
         low, high = self._box()
-        return np.clip(obs.astype(np.float32, copy=False), low, high)
+        return _clip(obs.astype(np.float32, copy=False), low, high)
 
     def decode(self, obs: np.ndarray, action: np.ndarray) -> np.ndarray:
         return self._check_action(action, self._check_obs_shape(obs).shape[:-1])

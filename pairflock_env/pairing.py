@@ -13,8 +13,14 @@ from __future__ import annotations
 
 import numpy as np
 
+try:  # what np.einsum calls (same numbers), without its Python dispatch: ~1 us per call
+    from numpy._core.multiarray import c_einsum as _einsum
+except ImportError:  # pragma: no cover - another numpy layout
+    _einsum = np.einsum
+
 __all__ = [
     "agent_pair_state",
+    "dot",
     "pair_error",
     "sliding_surface",
     "square_error",
@@ -22,18 +28,19 @@ __all__ = [
 ]
 
 
-def _dot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    return np.einsum("...k,...k->...", x, y)
+def dot(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """x.y over the last (spatial) axis, shape (...)."""
+    return _einsum("...k,...k->...", x, y)
 
 
 def square_error(y: np.ndarray, d_m: np.ndarray | float) -> np.ndarray:
     """e = ||y||^2 - d_m^2 (eq. 24), in m^2."""
-    return _dot(y, y) - np.square(d_m)
+    return dot(y, y) - np.square(d_m)
 
 
 def square_error_rate(y: np.ndarray, ydot: np.ndarray) -> np.ndarray:
     """e' = 2 y.y' (eq. 25), in m^2/s."""
-    return 2.0 * _dot(y, ydot)
+    return 2.0 * dot(y, ydot)
 
 
 def sliding_surface(
@@ -45,7 +52,7 @@ def sliding_surface(
 
 def pair_error(y: np.ndarray, d_m: np.ndarray | float) -> np.ndarray:
     """||y|| - d_m, in m (positive when the pair is too far apart)."""
-    return np.sqrt(_dot(y, y)) - d_m
+    return np.sqrt(dot(y, y)) - d_m
 
 
 def agent_pair_state(
@@ -67,10 +74,12 @@ def agent_pair_state(
         view, (B, M, dim), m), ``velocity`` (y', m/s), and (B, M): ``pair_distance`` ||y||
         (m), ``pair_error`` ||y|| - d_m (m), ``sliding_surface`` s (m^2/s).
     """
-    qa, pa = q[:, agent_uavs], p[:, agent_uavs]
-    off = q[:, partner_uavs] - qa
-    vel = p[:, partner_uavs] - pa
-    dist = np.sqrt(np.einsum("bmk,bmk->bm", off, off))
+    # take: q[:, agent_uavs] (the same values, C-ordered) at a fifth of the cost
+    qa, pa = q.take(agent_uavs, axis=1), p.take(agent_uavs, axis=1)
+    off = q.take(partner_uavs, axis=1) - qa
+    vel = p.take(partner_uavs, axis=1) - pa
+    yy = dot(off, off)  # once for the distance and eq. 24 (the same numbers either way)
+    dist = np.sqrt(yy)
     return {
         "q": qa,
         "p": pa,
@@ -78,5 +87,6 @@ def agent_pair_state(
         "velocity": vel,
         "pair_distance": dist,
         "pair_error": dist - d_m,
-        "sliding_surface": sliding_surface(off, vel, d_m, c),
+        # sliding_surface(off, vel, d_m, c) with y.y reused: c (y.y - d_m^2) + 2 y.y'
+        "sliding_surface": c * (yy - np.square(d_m)) + 2.0 * dot(off, vel),
     }

@@ -23,6 +23,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from .config import PairFlockConfig
+from .pairing import dot
 
 __all__ = [
     "DIVERGENCE_PENALTY",
@@ -44,7 +45,7 @@ def reward_terms(
     min_separation: np.ndarray,
 ) -> dict[str, np.ndarray]:
     """The weighted penalty terms (each <= 0), shapes (B, M); their sum is the reward."""
-    effort = np.einsum("...k,...k->...", u, u) / cfg.pair_accel_limit**2
+    effort = dot(u, u) / cfg.pair_accel_limit**2
     sep = cfg.reward_separation_distance
     short = np.maximum(0.0, sep - min_separation) / sep
     return {

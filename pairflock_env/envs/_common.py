@@ -107,12 +107,13 @@ def build_core_and_interface(
 
 def check_policy_actions(actions: Any, shape: tuple[int, ...], name: str = "actions") -> np.ndarray:
     """Policy actions as float64 of exactly ``shape``; TypeError/ValueError naming ``name``
-    otherwise (also for values that are finite but beyond float64's range)."""
-    out = real_array(actions, name, shape)
-    if not np.isfinite(out).all():  # e.g. np.longdouble("1e400"): finite, but inf as float64
-        bad = np.argwhere(~np.isfinite(out))[0].tolist()
-        raise ValueError(f"{name} is beyond float64's range (first at index {bad})")
-    return out
+    otherwise.
+
+    :func:`~pairflock_env.actions.real_array` rejects NaN/inf and saturates finite values
+    beyond float64's range (``np.longdouble("1e400")``, huge ints) to +-float64 max, so the
+    result is always finite: one check per action, nothing to repeat here.
+    """
+    return real_array(actions, name, shape)
 
 
 def check_reset_options(options: Any, n_uavs: int, dim: int, name: str = "options") -> None:
@@ -157,50 +158,70 @@ class HeldStep:
 def held_step(
     core: PairFlockCore, interface: LearningInterface, obs: np.ndarray, actions: np.ndarray
 ) -> HeldStep:
-    """Apply policy actions (B, M, dim) for ``interface.decision_period`` control steps.
+    """Apply checked policy actions (B, M, dim) for ``interface.decision_period`` control steps.
 
     Each control step decodes the held policy action against the fresh physical observation
     (:class:`~pairflock_env.decision.DecisionHold`) and steps the core. A swarm whose episode
     ends part-way keeps its results from that step; while other swarms go on, it integrates
     with no pair term until the view resets it (the core steps all swarms together). The
     decision stops early once every swarm has ended, so a single swarm's state stays at the
-    step its episode ended.
+    step its episode ended. The returned arrays may be the core's own (read, do not write).
     """
-    B, M = actions.shape[:2]
     k = interface.decision_period
+    if k != 1:
+        return _held_decision(core, interface, obs, actions, k)
+    if interface.passes_through:  # the identity: the policy's action is the env's
+        res = core.step(actions)
+        return HeldStep(res.obs, res.reward, res.terminated, res.truncated, res.info)
+    res = core.step(interface.decode(obs, actions))
+    r = interface.reward(res.reward, res.info, actions, res.obs)
+    return HeldStep(res.obs, r, res.terminated, res.truncated, res.info)
+
+
+def _held_decision(
+    core: PairFlockCore, interface: LearningInterface, obs: np.ndarray, actions: np.ndarray, k: int
+) -> HeldStep:
+    """:func:`held_step` for k > 1 control steps. While every swarm is live the results are
+    the latest step's; once some (not all) swarms have ended, row by row."""
+    B, M = actions.shape[:2]
     hold = DecisionHold.decided(interface, actions)
-    if k == 1:
-        res = core.step(hold.env_action(obs))
-        r = interface.reward(res.reward, res.info, actions, res.obs)
-        return HeldStep(res.obs, r, res.terminated, res.truncated, res.info)
     total = np.zeros((B, M))
     count = np.zeros(B)
     ended = np.zeros(B, bool)
     terminated = np.zeros(B, bool)
     truncated = np.zeros(B, bool)
-    out_obs = out_info = None
+    out_obs = out_info = None  # set once some swarms have ended and others go on
     for _ in range(k):
         env_a = hold.env_action(obs)
-        if ended.any():
+        if out_obs is not None:
             env_a = np.where(ended[:, None, None], 0.0, env_a)
         res = core.step(env_a)
-        live = ~ended
-        total[live] += interface.reward(res.reward, res.info, actions, res.obs)[live]
-        count[live] += 1
-        if out_obs is None:
-            out_obs = res.obs.copy()
-            out_info = {key: v.copy() for key, v in res.info.items()}
+        r = interface.reward(res.reward, res.info, actions, res.obs)
+        done = res.terminated | res.truncated
+        if out_obs is None:  # every swarm live
+            total += r
+            count += 1
+            now = done
         else:
+            live = ~ended
+            total[live] += r[live]
+            count[live] += 1
             out_obs[live] = res.obs[live]
             for key, v in res.info.items():
                 out_info[key][live] = v[live]
-        now = live & (res.terminated | res.truncated)
-        terminated[now] = res.terminated[now]
-        truncated[now] = res.truncated[now]
-        ended |= now
-        if ended.all():
-            break
+            now = live & done
+        if now.any():
+            terminated[now] = res.terminated[now]
+            truncated[now] = res.truncated[now]
+            ended |= now
+            if ended.all():
+                break
+            if out_obs is None:
+                out_obs = res.obs.copy()
+                out_info = {key: v.copy() for key, v in res.info.items()}
         obs = res.obs
+    if out_obs is None:
+        out_obs, out_info = res.obs, res.info
     return HeldStep(out_obs, total / count[:, None], terminated, truncated, out_info)
 
 

@@ -29,6 +29,10 @@ from ._common import (
 __all__ = ["PairFlockParallelEnv", "agent_name", "env", "parallel_env", "raw_env"]
 
 
+#: dtypes that real_array takes as they are (real, at most 64 bits): copied into float64 exactly
+_PLAIN = dict.fromkeys(np.typecodes["Float"][:-1] + np.typecodes["AllInteger"], True)
+
+
 def agent_name(uav_index: int) -> str:
     """The agent name of UAV ``uav_index``: ``"uav_<i>"``."""
     return f"uav_{uav_index}"
@@ -181,6 +185,13 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         self.possible_agents = [agent_name(i) for i in self.core.agent_uavs]
         self.agents: list[str] = []
         self._agent_index = {a: m for m, a in enumerate(self.possible_agents)}
+        self._action_names = {a: f"action of {a}" for a in self.possible_agents}
+        self._action_shape = (cfg.dim,)
+        # the infos every step adds to each agent's own
+        self._agent_consts = [
+            {"uav_index": int(a), "partner_index": int(b)}
+            for a, b in zip(self.core.agent_uavs, self.core.partner_uavs, strict=True)
+        ]
         self.partners = {
             agent_name(int(a)): agent_name(int(b))
             for a, b in zip(self.core.agent_uavs, self.core.partner_uavs, strict=True)
@@ -196,7 +207,7 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         self.state_space = spaces.Box(*state_bounds(cfg), dtype=np.float32)
         self.physical_obs: np.ndarray | None = None
         self._frames = SwarmFrames(self.core, render_mode)
-        self._title: str | None = None
+        self._title_values: tuple[float, float] | None = None  # of the render title
 
     # PettingZoo requires the same object on every call
     def observation_space(self, agent: str) -> spaces.Box:
@@ -241,10 +252,15 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
             raise ValueError(f"unknown agent {agent!r}; agents are {self.possible_agents}")
         if agent not in self.agents:
             raise RuntimeError(f"agent {agent!r} is done; call reset()")
-        return check_policy_actions(action, (self.config.dim,), f"action of {agent}")
+        shape = self._action_shape
+        x = action  # the usual case inline (what real_array does with it); anything else below
+        plain = type(x) is np.ndarray and x.shape == shape and _PLAIN.get(x.dtype.char)
+        if plain and np.isfinite(x).all():
+            return x.astype(np.float64, copy=False)
+        return check_policy_actions(action, shape, self._action_names[agent])
 
     def _check_action_dict(self, actions: Any) -> np.ndarray:
-        if not isinstance(actions, Mapping):
+        if type(actions) is not dict and not isinstance(actions, Mapping):
             raise TypeError(
                 f"actions must be a dict {{agent: action}}, got {type(actions).__name__}"
             )
@@ -256,9 +272,21 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         missing = [a for a in self.agents if a not in actions]
         if missing:
             raise ValueError(f"missing action for agent(s) {missing}; every live agent must act")
-        out = np.empty((1, len(self.possible_agents), self.config.dim))
+        live, shape = self.agents, self._action_shape
+        out = np.empty((1, len(self.possible_agents), *shape))
+        for a, m in self._agent_index.items():  # the usual case: real ndarrays, one check
+            x = actions[a] if a in live else None
+            if not (type(x) is np.ndarray and x.shape == shape and _PLAIN.get(x.dtype.char)):
+                break
+            out[0, m] = x
+        else:
+            if np.isfinite(out).all():
+                return out
+        # anything else: check_action's per-agent conversion and first error, in agent order
         for a, m in self._agent_index.items():
-            out[0, m] = self.check_action(a, actions[a])
+            if a not in live:
+                raise RuntimeError(f"agent {a!r} is done; call reset()")
+            out[0, m] = check_policy_actions(actions[a], shape, self._action_names[a])
         return out
 
     def step(self, actions: Mapping[str, Any]):
@@ -271,9 +299,9 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         res = held_step(self.core, self.interface, self.physical_obs[None], a)
         agents = self.possible_agents
         obs = self._emit(res.obs)
-        rewards = dict(zip(agents, res.reward[0].tolist(), strict=True))
-        term = bool(res.terminated[0])
-        trunc = bool(res.truncated[0])
+        rewards = dict(zip(agents, res.reward.tolist()[0], strict=True))
+        term = res.terminated.item(0)  # a Python bool
+        trunc = res.truncated.item(0)
         terminations = dict.fromkeys(agents, term)
         truncations = dict.fromkeys(agents, trunc)
         infos = self._infos(res.info)
@@ -286,24 +314,27 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
     def _emit(self, phys: np.ndarray):
         """Observations of swarm 0 by agent; keeps the physical observation."""
         self.physical_obs = phys[0]
-        enc = self.interface.encode(phys[0])
-        return {a: enc[m] for m, a in enumerate(self.possible_agents)}
+        return dict(zip(self.possible_agents, self.interface.encode(phys[0]), strict=True))
 
     def _infos(self, info: dict[str, np.ndarray]) -> dict[str, dict[str, Any]]:
-        # (B,) arrays are swarm-level, (B, M) arrays per agent, (B, ...) anything else
-        swarm = {k: v[0].item() for k, v in info.items() if v.ndim == 1}
-        per_agent = {k: v[0].tolist() for k, v in info.items() if v.ndim == 2}
+        # (B,) arrays are swarm-level, (B, M) arrays per agent, (B, ...) anything else; each
+        # agent's dict: its per-agent values, then the swarm's, then its UAV indices
+        keys, columns, swarm = [], [], {}
+        for k, v in info.items():
+            if v.ndim == 2:
+                keys.append(k)
+                columns.append(v.tolist()[0])
+            elif v.ndim == 1:
+                swarm[k] = v.item(0)
         out = {}
-        for m, a in enumerate(self.possible_agents):
-            d = {k: v[m] for k, v in per_agent.items()}
+        rows = zip(*columns, strict=True) if columns else ((),) * len(self.possible_agents)
+        for a, row, consts in zip(self.possible_agents, rows, self._agent_consts, strict=True):
+            d = dict(zip(keys, row, strict=True))
             d.update(swarm)
-            d["uav_index"] = int(self.core.agent_uavs[m])
-            d["partner_index"] = int(self.core.partner_uavs[m])
+            d.update(consts)
             out[a] = d
         first = out[self.possible_agents[0]]
-        self._title = (
-            f"t = {first['sim_time']:.2f} s   pair distance = {first['pair_distance']:.2f} m"
-        )
+        self._title_values = (first["sim_time"], first["pair_distance"])
         return out
 
     def state(self) -> np.ndarray:
@@ -318,7 +349,11 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
 
     def render(self):
         """The swarm as an RGB array (``render_mode="rgb_array"``) or in a window."""
-        return self._frames.render(0, self._title)
+        title = None
+        if self._title_values is not None:
+            t, dist = self._title_values
+            title = f"t = {t:.2f} s   pair distance = {dist:.2f} m"
+        return self._frames.render(0, title)
 
     def close(self) -> None:
         """Release the renderer; the env cannot be reset or stepped afterwards."""

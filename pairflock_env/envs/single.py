@@ -188,7 +188,7 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
     def _info(info: Mapping[str, np.ndarray]) -> dict[str, Any]:
         out: dict[str, Any] = {}
         for k, v in info.items():
-            out[k] = v[0].item() if v.ndim == 1 else v[0].copy()
+            out[k] = v.item(0) if v.ndim == 1 else v[0].copy()
         return out
 
     def render(self):

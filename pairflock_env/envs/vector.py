@@ -228,10 +228,14 @@ class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
     def _infos(self, info: Mapping[str, np.ndarray], rows: np.ndarray) -> dict[str, Any]:
         mask = np.zeros(self.num_envs, bool)
         mask[rows] = True
+        every = bool(mask.all())  # (each step) a copy of every row, zeros nowhere
         out: dict[str, Any] = {}
         for k, v in info.items():
-            arr = np.zeros_like(v)
-            arr[rows] = v[rows]
+            if every:
+                arr = v.copy(order="K")  # the layout of zeros_like
+            else:
+                arr = np.zeros_like(v)
+                arr[rows] = v[rows]
             out[k] = arr
             out["_" + k] = mask.copy()
         return out
