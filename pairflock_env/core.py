@@ -36,7 +36,6 @@ from .actions import check_pair_actions, decode_pair_actions, real_array
 from .config import PairFlockConfig, make_config
 from .delay import PartnerDelayBuffer
 from .dynamics import make_vehicle
-from .flocking import FlockingParams
 from .leader import make_leader
 from .neighbors import NeighborGrid
 from .observations import ObsLayout, add_sensor_noise, build_observation
@@ -119,16 +118,11 @@ class PairFlockCore:
         N, D = cfg.n_uavs, cfg.dim
         self.layout = ObsLayout(D, cfg.obs_neighbors)
 
-        pairs = np.asarray(cfg.pairs, dtype=np.int64)  # (P, 2)
-        self.agent_uavs = pairs.reshape(-1).copy()  # (M,) A0, B0, A1, B1, ...
-        self.partner_uavs = pairs[:, ::-1].reshape(-1).copy()  # (M,)
-        self.agent_pair = np.repeat(np.arange(len(pairs)), 2)  # (M,) pair index of each agent
-        self.partner_of = np.full(N, -1, np.int64)
-        self.partner_of[self.agent_uavs] = self.partner_uavs
-        self._agent_dm = cfg.d_m_array[self.agent_pair]  # (M,)
-
-        self._params = FlockingParams(cfg)
-        self._neighbors = NeighborSweep(cfg, B, self._params, self.partner_of)
+        # the sweeps of the current state, and the agents' indexing (one definition, there)
+        self._neighbors = sw = NeighborSweep(cfg, B)
+        self.agent_uavs, self.partner_uavs = sw.agent_uavs, sw.partner_uavs  # (M,) A0, B0, ...
+        self.agent_pair, self.partner_of = sw.agent_pair, sw.partner_of  # (M,), (N,)
+        self._agent_dm = sw.agent_dm  # (M,)
         self._leader = make_leader(cfg)
         self.vehicle = make_vehicle(cfg, B)
         self.safety = SafetyStage(cfg, self.agent_uavs, B)  # stage 2b (safety_filter)
@@ -138,7 +132,7 @@ class PairFlockCore:
         self.steps = np.zeros(B, np.int64)
         self._pinned = np.zeros((B, N))
         self._flock_out: dict[str, np.ndarray] | None = None
-        M = 2 * len(pairs)
+        M = len(self.agent_uavs)
         self._obs = np.zeros((B, M, self.layout.size), np.float32)
         self._info: dict[str, np.ndarray] | None = None  # the last step's infos
         self._noise: tuple[np.ndarray, ...] | None = None  # this step's sensor noise

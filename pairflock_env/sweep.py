@@ -42,25 +42,23 @@ class NeighborSweep:
     Args:
         cfg: the configuration (pairs, radius, obs_neighbors, neighbor_search ...).
         num_envs: number of swarms B.
-        params: the flocking parameters of ``cfg``.
-        partner_of: (N,) partner UAV of each UAV, or -1.
+
+    It holds the one definition of the agents' indexing that the core shares:
+    ``agent_uavs`` (M,) A0, B0, A1, B1, ...; ``partner_uavs`` (M,); ``agent_pair`` (M,) the
+    pair index of each agent; ``agent_dm`` (M,) its pair's d_m; ``partner_of`` (N,) the
+    partner UAV of each UAV, or -1.
     """
 
-    def __init__(
-        self,
-        cfg: PairFlockConfig,
-        num_envs: int,
-        params: FlockingParams,
-        partner_of: np.ndarray,
-    ) -> None:
-        pairs = np.asarray(cfg.pairs, dtype=np.int64)
+    def __init__(self, cfg: PairFlockConfig, num_envs: int) -> None:
+        pairs = np.asarray(cfg.pairs, dtype=np.int64)  # (P, 2)
         self.cfg = cfg
-        self.params = params
-        self.partner_of = partner_of
+        self.params = FlockingParams(cfg)
         self.agent_uavs = pairs.reshape(-1).copy()
         self.partner_uavs = pairs[:, ::-1].reshape(-1).copy()
         self.agent_pair = np.repeat(np.arange(len(pairs)), 2)
         self.agent_dm = cfg.d_m_array[self.agent_pair]
+        self.partner_of = np.full(cfg.n_uavs, -1, np.int64)
+        self.partner_of[self.agent_uavs] = self.partner_uavs
         self.grid = make_grid(cfg, num_envs)
         self.flock_out: dict[str, np.ndarray] | None = None
         self.pair_out: dict[str, np.ndarray] | None = None
