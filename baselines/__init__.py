@@ -30,6 +30,7 @@ from ._moved import install_aliases
 if TYPE_CHECKING:  # the names as static tools (type checkers, the API docs) see them
     from .controllers import (
         POLICIES,
+        BrakingCurveController,
         PairPolicy,
         ProportionalController,
         SlidingModeController,
@@ -40,6 +41,7 @@ if TYPE_CHECKING:  # the names as static tools (type checkers, the API docs) see
 
 __all__ = [
     "POLICIES",
+    "BrakingCurveController",
     "PairPolicy",
     "ProportionalController",
     "SlidingModeController",

@@ -453,6 +453,25 @@ class PairFrameInterface(LearningInterface):
         over = np.sqrt(np.einsum("...k,...k->...", u, u))[..., None] / bound
         return u / (L * np.maximum(over, 1.0))
 
+    def action_for(self, obs: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """The network action in [-1, 1]^dim for a world-frame pair acceleration ``u`` (m/s^2):
+        the inverse of :meth:`decode` (``decode(obs, action_for(obs, u)) * pair_accel_limit
+        == u`` whenever ``||u||`` is within the bound and the pair-frame action within the
+        box; outside, the action is clipped to the box). Used to label an analytic
+        controller's commands for imitation (:mod:`train.imitate`)."""
+        obs = self._check_obs(obs)
+        u = np.asarray(u, dtype=np.float64)
+        if u.shape != (*obs.shape[:-1], self.config.dim):
+            raise ValueError(
+                f"u has shape {u.shape}; expected {(*obs.shape[:-1], self.config.dim)} "
+                "(one world-frame acceleration per observation)"
+            )
+        lay = self.layout
+        if self.params.feedforward:
+            u = u - 0.5 * (lay.get(obs, "partner_flock_accel") - lay.get(obs, "flock_accel"))
+        a = _to_frame(pair_basis(lay.get(obs, "partner_offset")), u) / self.params.accel_scale
+        return np.clip(a, -1.0, 1.0)
+
     # ------------------------------------------------------------------ reward
     def reward(self, reward, info, action, obs=None):
         p, cfg = self.params, self.config

@@ -3,9 +3,11 @@
 * :mod:`~baselines.controllers.base` - :class:`PairPolicy` (SB3's ``predict`` over named
   observations), :class:`ZeroPolicy`, :func:`resolve_env`;
 * :mod:`~baselines.controllers.sliding_mode` - eq. 28; :mod:`~baselines.controllers.proportional`
-  - eq. 44; :mod:`~baselines.controllers.sb3` - the ``"sb3:<model.zip>"`` loader (SB3/torch,
-  imported only when asked for); :mod:`~baselines.controllers.zoo` - the packaged policies
-  (``"sb3:pair_n20_a50"``) and the lookup of packaged files by name;
+  - eq. 44; :mod:`~baselines.controllers.braking` - a braking-curve law within a ball (not in
+  the paper; the small-budget reference); :mod:`~baselines.controllers.sb3` - the
+  ``"sb3:<model.zip>"`` loader (SB3/torch, imported only when asked for);
+  :mod:`~baselines.controllers.zoo` - the packaged policies (``"sb3:pair_n20_a50"``) and the
+  lookup of packaged files by name;
 * :mod:`~baselines.controllers.registry` - :data:`POLICIES` and :func:`make_pair_policy`.
 
 This layer imports only :mod:`pairflock_env` (never evaluation, reporting or training code).
@@ -14,12 +16,14 @@ This layer imports only :mod:`pairflock_env` (never evaluation, reporting or tra
 from __future__ import annotations
 
 from .base import PairPolicy, ZeroPolicy, resolve_env
+from .braking import BrakingCurveController
 from .proportional import ProportionalController
 from .registry import POLICIES, make_pair_policy
 from .sliding_mode import SlidingModeController
 
 __all__ = [
     "POLICIES",
+    "BrakingCurveController",
     "PairPolicy",
     "ProportionalController",
     "SlidingModeController",

@@ -7,6 +7,7 @@ from collections.abc import Callable
 from typing import Any
 
 from .base import ZeroPolicy
+from .braking import BrakingCurveController
 from .proportional import ProportionalController
 from .sliding_mode import SlidingModeController
 
@@ -25,6 +26,7 @@ def _sb3_policy(path: str, env: Any, **gains: Any) -> Any:
 POLICIES: dict[str, Callable[..., Any]] = {
     "smc": SlidingModeController,
     "proportional": ProportionalController,
+    "braking": BrakingCurveController,
     "zero": ZeroPolicy,
     "sb3:": _sb3_policy,
 }
