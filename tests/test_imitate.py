@@ -76,3 +76,12 @@ def test_imitate_cli_help_and_bad_arguments():
         text=True,
     )
     assert twice.returncode == 2 and "the seeds must differ" in twice.stderr
+
+
+def test_eval_sets_change_the_validation_only():
+    from train.imitate import _settings
+
+    s = _settings("pair_safe_a50", 3, [("safety_filter", "none")], [("safety_filter", "cbf")])
+    assert s.seed == 3 and s.init_model is None
+    assert s.env["safety_filter"] == "none" and s.eval_env["safety_filter"] == "cbf"
+    assert "safety_filter" not in _settings("pair_n20_a50", 0, [], []).eval_env

@@ -48,6 +48,7 @@ import numpy as np
 __all__ = [
     "build_parser",
     "collect",
+    "dagger",
     "fit",
     "imitate",
     "imitate_seeds",
@@ -133,12 +134,46 @@ def mse(policy: Any, x: np.ndarray, y: np.ndarray) -> float:
         )
 
 
-def _settings(config: str, seed: int, env_sets: list[tuple[str, Any]]):
+def dagger(
+    model: Any,
+    venv: Any,
+    teachers,
+    *,
+    iterations: int,
+    decisions: int,
+    rng,
+    quiet: bool,
+    **fit_kw: Any,
+) -> dict[str, Any]:
+    """The DAgger rounds of the module docstring on ``model``'s policy (in place); returns
+    the sample count and the loss before the first fit and after each."""
+    obs = venv.reset()
+    xs, ys, losses = [], [], []
+    for it in range(iterations):
+        if it == 0:
+            act = lambda o, target: target  # noqa: E731 - the teacher flies
+        else:
+            act = lambda o, target: model.predict(o, deterministic=True)[0]  # noqa: E731
+        x, y, obs = collect(venv, obs, teachers, act, decisions)
+        xs.append(x)
+        ys.append(y)
+        if it == 0:
+            before = mse(model.policy, x, y)
+        losses.append(fit(model.policy, np.concatenate(xs), np.concatenate(ys), rng=rng, **fit_kw))
+        if not quiet:
+            print(f"round {it + 1}/{iterations}: {sum(map(len, xs))} samples, mse {losses[-1]:.2e}")
+    return {"samples": int(sum(map(len, xs))), "mse_before": before, "mse": losses}
+
+
+def _settings(config: str, seed: int, env_sets: list[tuple[str, Any]], eval_sets):
     from .settings import load_yaml, resolve_config, settings_from_sources
 
     data = dict(load_yaml(resolve_config(config)))
     data.pop("init_model", None)  # imitation starts from the run's fresh network
-    return settings_from_sources(data, {"seed": seed}, env_sets=env_sets)
+    flags: dict[str, Any] = {"seed": seed}
+    if eval_sets:  # as python -m train --eval-set: on top of the config's eval_env
+        flags["eval_env"] = {**dict(data.get("eval_env", {})), **dict(eval_sets)}
+    return settings_from_sources(data, flags, env_sets=env_sets)
 
 
 def imitate(
@@ -154,6 +189,7 @@ def imitate(
     lr: float = 1e-3,
     batch: int = 4096,
     env_sets: list[tuple[str, Any]] = (),
+    eval_sets: list[tuple[str, Any]] = (),
     quiet: bool = False,
     validate: bool = False,
 ) -> dict[str, Any]:
@@ -168,42 +204,20 @@ def imitate(
     from .run import make_vec_env
 
     t0 = time.perf_counter()
-    settings = _settings(config, seed, list(env_sets))
+    settings = _settings(config, seed, list(env_sets), list(eval_sets))
     venv = make_vec_env(settings)
     model = build_model(settings, venv)
     teachers = [make_pair_policy(teacher, env.config, **(gains or {})) for env in _task_envs(venv)]
-    rng = np.random.default_rng(seed)
-    obs = venv.reset()
-    xs, ys, losses = [], [], []
-    for it in range(iterations):
-        if it == 0:
-            act = lambda o, target: target  # noqa: E731 - the teacher flies
-        else:
-            act = lambda o, target: model.predict(o, deterministic=True)[0]  # noqa: E731
-        x, y, obs = collect(venv, obs, teachers, act, decisions)
-        xs.append(x)
-        ys.append(y)
-        if it == 0:
-            before = mse(model.policy, x, y)
-        loss = fit(
-            model.policy,
-            np.concatenate(xs),
-            np.concatenate(ys),
-            epochs=epochs,
-            lr=lr,
-            batch=batch,
-            rng=rng,
-        )
-        losses.append(loss)
-        if not quiet:
-            print(f"round {it + 1}/{iterations}: {sum(map(len, xs))} samples, mse {loss:.2e}")
+    fits = dagger(
+        model, venv, teachers, iterations=iterations, decisions=decisions, epochs=epochs,
+        lr=lr, batch=batch, rng=np.random.default_rng(seed), quiet=quiet,
+    )  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
     cfg = _task_envs(venv)[0].config
     record = {
         "config": str(config), "teacher": teacher, "gains": gains or {}, "seed": seed,
         "iterations": iterations, "decisions": decisions, "epochs": epochs, "lr": lr,
-        "batch": batch, "samples": int(sum(map(len, xs))), "mse_before": before, "mse": losses,
-        "wall_s": round(time.perf_counter() - t0, 1),
+        "batch": batch, **fits, "wall_s": round(time.perf_counter() - t0, 1),
     }  # fmt: skip
     meta = metadata(settings, venv.unwrapped.interface, cfg)
     setattr(model, METADATA_KEY, {**meta, "imitation": record})  # how the weights were made
@@ -317,21 +331,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--batch", type=int, default=4096, help="minibatch size")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="FIELD=VALUE",
                    help="env override for every task (repeatable)")  # fmt: skip
+    p.add_argument("--eval-set", dest="eval_sets", action="append", default=[],
+                   metavar="FIELD=VALUE",
+                   help="validation-only override, on top of --set (repeatable)")  # fmt: skip
     p.add_argument("--out", type=Path, required=True, help="output folder")
     p.add_argument("--quiet", action="store_true", help="no per-round lines")
     return p
 
 
 def _pairs(items: list[str], flag: str, parser: argparse.ArgumentParser) -> list[tuple]:
-    import yaml
+    from baselines.evaluation.specs import parse_assignment
 
-    out = []
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name:
-            parser.error(f"{flag} {item!r} is invalid: use NAME=VALUE")
-        out.append((name, yaml.safe_load(value)))
-    return out
+    try:
+        return [parse_assignment(item, flag) for item in items]
+    except ValueError as e:
+        parser.error(str(e))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -348,7 +362,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.config, args.out, args.seeds, workers=args.workers, teacher=args.teacher,
         gains=dict(_pairs(args.gain, "--gain", parser)), iterations=args.iterations,
         decisions=args.decisions, epochs=args.epochs, lr=args.lr, batch=args.batch,
-        env_sets=_pairs(args.sets, "--set", parser), quiet=args.quiet,
+        env_sets=_pairs(args.sets, "--set", parser),
+        eval_sets=_pairs(args.eval_sets, "--eval-set", parser), quiet=args.quiet,
     )  # fmt: skip
     print((args.out / "summary.md").read_text())
     print(f"wrote {args.out / 'best_model.zip'} (seed {result['best']})")
