@@ -21,6 +21,7 @@ EXPECTED = {
     "pairflock-evaluate": "train.evaluate:main",
     "pairflock-train-eval": "train.evaluate:main",
     "pairflock-throughput": "train.throughput:main",
+    "pairflock-imitate": "train.imitate:main",
 }
 
 
