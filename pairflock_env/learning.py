@@ -223,6 +223,21 @@ class LearningInterface:
         """Env actions (..., dim) (units of pair_accel_limit) from policy actions (..., dim)."""
         raise NotImplementedError
 
+    def action_for(self, obs: np.ndarray, u: np.ndarray) -> np.ndarray:  # pragma: no cover
+        """Policy actions (..., dim) that decode to the world-frame pair accelerations ``u``
+        (..., dim, m/s^2) where the action box allows, clipped to it elsewhere: the inverse of
+        :meth:`decode`, to label an analytic controller's commands (:mod:`train.imitate`)."""
+        raise NotImplementedError
+
+    def _check_accel(self, obs: np.ndarray, u: np.ndarray) -> np.ndarray:
+        u = np.asarray(u, dtype=np.float64)
+        if u.shape != (*obs.shape[:-1], self.config.dim):
+            raise ValueError(
+                f"u has shape {u.shape}; expected {(*obs.shape[:-1], self.config.dim)} "
+                "(one world-frame acceleration per observation)"
+            )
+        return u
+
     def reward(
         self,
         reward: np.ndarray,
@@ -299,6 +314,10 @@ class WorldInterface(LearningInterface):
 
     def decode(self, obs: np.ndarray, action: np.ndarray) -> np.ndarray:
         return self._check_action(action, self._check_obs_shape(obs).shape[:-1])
+
+    def action_for(self, obs: np.ndarray, u: np.ndarray) -> np.ndarray:
+        u = self._check_accel(self._check_obs_shape(obs), u)
+        return np.clip(u / self.config.pair_accel_limit, -1.0, 1.0)
 
     def reward(self, reward, info, action, obs=None):
         return np.asarray(reward, dtype=np.float64)
@@ -455,17 +474,11 @@ class PairFrameInterface(LearningInterface):
 
     def action_for(self, obs: np.ndarray, u: np.ndarray) -> np.ndarray:
         """The network action in [-1, 1]^dim for a world-frame pair acceleration ``u`` (m/s^2):
-        the inverse of :meth:`decode` (``decode(obs, action_for(obs, u)) * pair_accel_limit
-        == u`` whenever ``||u||`` is within the bound and the pair-frame action within the
-        box; outside, the action is clipped to the box). Used to label an analytic
-        controller's commands for imitation (:mod:`train.imitate`)."""
+        ``decode(obs, action_for(obs, u)) * pair_accel_limit == u`` whenever ``||u||`` is
+        within the bound and the pair-frame action within the box; outside, the action is
+        clipped to the box."""
         obs = self._check_obs(obs)
-        u = np.asarray(u, dtype=np.float64)
-        if u.shape != (*obs.shape[:-1], self.config.dim):
-            raise ValueError(
-                f"u has shape {u.shape}; expected {(*obs.shape[:-1], self.config.dim)} "
-                "(one world-frame acceleration per observation)"
-            )
+        u = self._check_accel(obs, u)
         lay = self.layout
         if self.params.feedforward:
             u = u - 0.5 * (lay.get(obs, "partner_flock_accel") - lay.get(obs, "flock_accel"))
