@@ -125,6 +125,7 @@ __all__ = [
     "interface_from_dict",
     "make_interface",
     "pair_basis",
+    "pair_feedforward",
     "symlog",
 ]
 
@@ -132,6 +133,13 @@ __all__ = [
 def symlog(x: np.ndarray) -> np.ndarray:
     """sign(x) log(1 + |x|): linear near 0, logarithmic far out."""
     return np.sign(x) * np.log1p(np.abs(x))
+
+
+def pair_feedforward(layout: ObsLayout, obs: np.ndarray) -> np.ndarray:
+    """Half the flocking difference, 1/2 (f_j - f_i) (..., dim), from the UAV's own
+    observation: the feed-forward that leaves the pair's relative motion (eq. 23) to the two
+    pair terms alone."""
+    return 0.5 * (layout.get(obs, "partner_flock_accel") - layout.get(obs, "flock_accel"))
 
 
 def pair_basis(z: np.ndarray) -> np.ndarray:
@@ -467,7 +475,7 @@ class PairFrameInterface(LearningInterface):
         R = pair_basis(z)
         u = self.params.accel_scale * np.einsum("...ji,...j->...i", R, a)  # R^T a
         if self.params.feedforward:
-            u = u + 0.5 * (lay.get(obs, "partner_flock_accel") - lay.get(obs, "flock_accel"))
+            u = u + pair_feedforward(lay, obs)
         bound = min(self.params.max_accel, L)
         over = np.sqrt(np.einsum("...k,...k->...", u, u))[..., None] / bound
         return u / (L * np.maximum(over, 1.0))
@@ -481,7 +489,7 @@ class PairFrameInterface(LearningInterface):
         u = self._check_accel(obs, u)
         lay = self.layout
         if self.params.feedforward:
-            u = u - 0.5 * (lay.get(obs, "partner_flock_accel") - lay.get(obs, "flock_accel"))
+            u = u - pair_feedforward(lay, obs)
         a = _to_frame(pair_basis(lay.get(obs, "partner_offset")), u) / self.params.accel_scale
         return np.clip(a, -1.0, 1.0)
 

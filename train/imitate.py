@@ -232,20 +232,15 @@ def imitate(
 def validation_summary(model: Any, settings: Any, interface: Any) -> dict[str, float]:
     """The run's own evaluation of ``model`` (its evaluation tasks and seeds, full episodes)
     and the score ``python -m train`` keeps its best model by (lower is better)."""
-    from baselines.controllers.sb3 import SB3PairPolicy
     from baselines.reporting.criteria import TARGETS
 
-    from .mix_eval import score_function, summarize_tasks
-    from .run import evaluate_policy_rows
+    from .mix_eval import score_function
+    from .run import evaluate_model
     from .tasks import evaluation_tasks
 
-    iface = interface.to_dict()
-    by_task = {}
-    for task in evaluation_tasks(settings):
-        cfg = task.config(settings.preset)
-        policy = SB3PairPolicy(model, cfg, iface)
-        by_task[task.name] = evaluate_policy_rows(policy, cfg, list(settings.eval_seeds))
-    summary = summarize_tasks(by_task, TARGETS[settings.eval_targets])
+    cfgs = {t.name: t.config(settings.preset) for t in evaluation_tasks(settings)}
+    targets = TARGETS[settings.eval_targets]
+    _, summary = evaluate_model(model, interface, cfgs, settings.eval_seeds, targets)
     summary["score"] = float(score_function(settings)(summary))
     return summary
 

@@ -28,6 +28,7 @@ from .settings import RunSettings
 __all__ = [
     "METADATA_KEY",
     "RunResult",
+    "evaluate_model",
     "evaluate_policy_rows",
     "linear_schedule",
     "make_vec_env",
@@ -82,6 +83,21 @@ def evaluate_policy_rows(policy: Any, cfg: Any, seeds: list[int]) -> list[dict[s
     from baselines.evaluation.rollout import rollout, trace_metrics
 
     return trace_metrics(rollout(cfg, policy, seeds))
+
+
+def evaluate_model(model: Any, interface: Any, eval_cfgs, seeds, targets):
+    """A model's evaluation as a run selects by: rows per task (``eval_cfgs``: task name ->
+    config) on ``seeds``, and their summary (:func:`train.mix_eval.summarize_tasks`)."""
+    from baselines.controllers.sb3 import SB3PairPolicy
+
+    from .mix_eval import summarize_tasks
+
+    iface = interface.to_dict()
+    by_task = {
+        task: evaluate_policy_rows(SB3PairPolicy(model, cfg, iface), cfg, list(seeds))
+        for task, cfg in eval_cfgs.items()
+    }
+    return by_task, summarize_tasks(by_task, targets)
 
 
 def _write_settings(out: Path, settings: RunSettings) -> None:
@@ -199,16 +215,12 @@ class _Session:
         return summaries
 
     def evaluate(self):
-        from baselines.controllers.sb3 import SB3PairPolicy
+        from .mix_eval import tagged_rows
 
-        from .mix_eval import summarize_tasks, tagged_rows
-
-        iface, seeds = self.interface.to_dict(), self.settings.eval_seeds
-        by_task = {
-            task: evaluate_policy_rows(SB3PairPolicy(self.model, cfg, iface), cfg, seeds)
-            for task, cfg in self.eval_cfgs.items()
-        }
-        return tagged_rows(by_task), summarize_tasks(by_task, self.targets)
+        by_task, summary = evaluate_model(
+            self.model, self.interface, self.eval_cfgs, self.settings.eval_seeds, self.targets
+        )
+        return tagged_rows(by_task), summary
 
     def on_result(self, step: int, rows, summary, improved: bool) -> None:
         from baselines.evaluation.io import write_csv, write_json

@@ -29,6 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from pairflock_env.learning import pair_feedforward
+
 from .base import PairPolicy, gain_value
 
 __all__ = ["BrakingCurveController"]
@@ -73,6 +75,6 @@ class BrakingCurveController(PairPolicy):
         target = -np.sign(e) * np.minimum(np.sqrt(2.0 * g["a_b"] * np.abs(e)), g["k_e"] * np.abs(e))
         half_k = 0.5 * g["k"]
         w = half_k * (rate - target) * e_r + half_k * (v - rate * e_r)
-        u = 0.5 * (get(obs, "partner_flock_accel") - get(obs, "flock_accel")) + w
+        u = pair_feedforward(self.layout, obs) + w
         norm = np.linalg.norm(u, axis=-1, keepdims=True)
         return u / np.maximum(norm / self._limit, 1.0)
