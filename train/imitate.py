@@ -219,12 +219,13 @@ def imitate(
         "iterations": iterations, "decisions": decisions, "epochs": epochs, "lr": lr,
         "batch": batch, **fits, "wall_s": round(time.perf_counter() - t0, 1),
     }  # fmt: skip
-    meta = metadata(settings, venv.unwrapped.interface, cfg)
+    interface = venv.unwrapped.interface
+    venv.close()
+    meta = metadata(settings, interface, cfg)
     setattr(model, METADATA_KEY, {**meta, "imitation": record})  # how the weights were made
     save_model_atomic(model, out / "model.zip")
-    venv.close()
     if validate:
-        record["validation"] = validation_summary(model, settings, venv.unwrapped.interface)
+        record["validation"] = validation_summary(model, settings, interface)
     (out / "imitation.json").write_text(json.dumps(record, indent=2) + "\n")
     return record
 
