@@ -130,7 +130,7 @@ def test_make_pair_policy_rejects_bad_names_and_gains():
     "name, gain",
     [("smc", g) for g in ("c", "k", "a", "b", "boundary_layer")]
     + [("proportional", "k_p")]
-    + [("braking", g) for g in ("a_b", "k", "accel_limit")],
+    + [("braking", g) for g in ("a_b", "k", "accel_limit", "detour", "detour_near")],
 )
 def test_every_gain_is_checked_and_named(name, gain):
     cfg = make_config("paper", n_uavs=12)
@@ -192,3 +192,57 @@ def test_braking_law_stays_in_its_ball_and_holds_the_distance():
     same = obs.copy()
     same[:, own.layout.slice("partner_offset")] = 0.0  # partners at one point: no direction
     assert np.isfinite(own.accel(same)).all()
+
+
+def _partner_view(layout, obs):
+    """The partner's observation of the same state, for the fields the detour reads."""
+    get = layout.get
+    z, v = get(obs, "partner_offset"), get(obs, "partner_velocity")
+    out = obs.copy()
+    for name, value in (
+        ("partner_offset", -z),
+        ("partner_velocity", -v),
+        ("leader_offset", get(obs, "leader_offset") - z),
+        ("leader_velocity", get(obs, "leader_velocity") - v),
+    ):
+        out[:, layout.slice(name)] = value
+    return out
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_braking_detour_is_one_common_mode_for_both_members(dim):
+    """Both members compute the same detour acceleration from their own observations (it
+    moves the midpoint, not the pair's relative motion), also with the midpoint on the
+    axis through the leader, where the tie is broken by who is farther from it."""
+    kw = dict(preset="paper", n_uavs=12) if dim == 2 else dict(preset="paper-quadrotor")
+    law = make_pair_policy("braking", make_config(**kw), detour=80.0)
+    rng = np.random.default_rng(1)
+    obs = rng.normal(0.0, 60.0, (256, law.layout.size))
+    z = law.layout.get(obs, "partner_offset")
+    on_axis = obs.copy()  # leader on the pair's axis: c_perp = 0
+    on_axis[:, law.layout.slice("leader_offset")] = z * rng.uniform(-1.0, 2.0, (256, 1))
+    for x in (obs, on_axis):
+        get = law.layout.get
+        y = _partner_view(law.layout, x)
+        dist = np.linalg.norm(z, axis=-1, keepdims=True)
+        mine = law._detour(x, get(x, "partner_offset"), get(x, "partner_velocity"), dist)
+        theirs = law._detour(y, get(y, "partner_offset"), get(y, "partner_velocity"), dist)
+        np.testing.assert_allclose(mine, theirs, atol=1e-9)
+        assert np.linalg.norm(mine, axis=-1).max() > 1.0  # it does push somewhere
+    with pytest.raises(ValueError, match=r"detour_far=30\.0 is invalid"):
+        make_pair_policy("braking", make_config(**kw), detour_near=40.0, detour_far=30.0)
+
+
+def test_braking_detour_meets_beside_the_flock():
+    """From the paper's corners at N = 100 and 50 m/s^2, with the filter: the straight law
+    meets in the flock, the detour beside it, sooner and farther from the other UAVs."""
+    cfg = make_config(
+        "paper", n_uavs=100, init="corners", pair_accel_limit=50.0, obs_neighbors=12,
+        safety_filter="cbf", safety_brake_accel=40.0, safety_other_accel=20.0, horizon=10.0,
+    )  # fmt: skip
+    runs = {
+        d: trace_metrics(rollout(cfg, make_pair_policy("braking", cfg, detour=d), [3]))[0]
+        for d in (0.0, 80.0)
+    }
+    assert runs[80.0]["band_time"] < 4.5 < runs[0.0]["band_time"]
+    assert runs[80.0]["min_pair_separation"] > runs[0.0]["min_pair_separation"] >= 0.99
