@@ -539,3 +539,27 @@ def test_old_interface_names_still_load(tmp_path):
         RunSettings.from_dict({"frame": "pair", "interface": "world"})
     preset, over = _task_overrides(ROOT / "models" / "pair_n20_a50.zip")
     assert preset == "paper" and over["pair_accel_limit"] == 50.0
+
+
+def test_evaluate_baselines_take_gains_and_limits(capsys):
+    """``train.evaluate --baselines NAME[:GAINS][@LIMIT]``: accepted as the benchmark's
+    specs, and a bad name, gain or limit stops the CLI naming the entry."""
+    from train import evaluate
+
+    parser = evaluate.build_parser()
+    good = ["braking:detour=80", "smc@1000", "braking:k=10,detour=60@40"]
+    args = parser.parse_args(["pair_n20_a50", "--baselines", *good])
+    evaluate._check_args(args, parser)
+    rows = evaluate.run_job(str(args.model), good[2], 12, "corners", [0], {"horizon": 0.05})
+    assert rows[0]["pair_accel_limit"] == 40.0 and rows[0]["policy"] == good[2]
+    for bad, why in (
+        ("smcc", "analytic controllers are"),
+        ("braking:detour=-1", "detour=-1"),
+        ("braking:kk=1", "unknown gain"),
+        ("smc@0", "LIMIT after @"),
+    ):
+        args = parser.parse_args(["pair_n20_a50", "--baselines", bad])
+        with pytest.raises(SystemExit):
+            evaluate._check_args(args, parser)
+        err = capsys.readouterr().err
+        assert f"--baselines {bad!r} is invalid" in err and why in err, err

@@ -8,8 +8,9 @@ rollout and metrics (``baselines.evaluation.rollout``), on held-out seeds.
 The task is the one the model was evaluated on during training (stored in the model file:
 preset and overrides, e.g. ``pair_accel_limit=50``, the preset's 50 s episode), with ``n_uavs``
 and ``init`` varied as asked and ``--set`` overrides on top. Baselines are names for
-``baselines.make_pair_policy``; ``name@LIMIT`` runs it with ``pair_accel_limit=LIMIT`` (e.g.
-``smc@1000``: sliding mode with the paper's unconstrained acceleration). Writes
+``baselines.make_pair_policy``, with gains as in the benchmark (``braking:detour=80``);
+``name@LIMIT`` runs it with ``pair_accel_limit=LIMIT`` (e.g. ``smc@1000``: sliding mode with
+the paper's unconstrained acceleration). Writes
 ``results.csv`` (one row per run), ``summary.md`` (median [min-max] over seeds per setting
 and policy, and the learned policy's targets,
 :data:`baselines.reporting.criteria.LEARNED`) and ``run.json``.
@@ -26,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from baselines.evaluation.parallel import imap_unordered, pin_threads
+from baselines.evaluation.specs import parse_policy
 from baselines.reporting.criteria import check_learned
 
 __all__ = ["COLUMNS", "acceptance", "build_parser", "main", "run_job", "summary_table"]
@@ -67,12 +69,17 @@ def run_job(
 
     preset, over = _task_overrides(Path(model_path))
     over = {**over, "n_uavs": n_uavs, "init": init, **extra}
-    name, label = policy, policy
+    name, label, gains = policy, policy, {}
     if "@" in policy:
-        name, limit = policy.split("@", 1)
+        name, limit = policy.rsplit("@", 1)
         over["pair_accel_limit"] = float(limit)
     cfg = make_config(preset, **over)
-    pol = make_pair_policy(f"sb3:{model_path}" if name == "learned" else name, cfg)
+    if name == "learned":
+        name = f"sb3:{model_path}"
+    else:
+        spec = parse_policy(name)
+        name, gains = spec.name, dict(spec.gains)
+    pol = make_pair_policy(name, cfg, **gains)
     t0 = time.perf_counter()
     rows = trace_metrics(rollout(cfg, pol, seeds))
     wall = time.perf_counter() - t0
@@ -142,7 +149,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--baselines",
         nargs="*",
         default=["smc", "smc@1000", "proportional"],
-        help="analytic controllers for comparison (default: smc smc@1000 proportional)",
+        help="analytic controllers for comparison, NAME[:GAIN=V,...][@LIMIT] "
+        "(default: smc smc@1000 proportional)",
     )
     p.add_argument(
         "--set",
@@ -183,7 +191,6 @@ def _add_check_options(p: argparse.ArgumentParser) -> None:
 
 def _check_args(args: argparse.Namespace, parser: argparse.ArgumentParser) -> dict[str, Any]:
     """Validate the options; returns the ``--set`` overrides."""
-    from baselines import POLICIES
     from baselines.controllers.zoo import resolve_model
     from baselines.evaluation.specs import parse_assignment
 
@@ -197,24 +204,39 @@ def _check_args(args: argparse.Namespace, parser: argparse.ArgumentParser) -> di
         if n < 2:
             parser.error(f"--n-uavs {n} is invalid: must be >= 2")
     for b in args.baselines:
-        name = b.split("@", 1)[0]
-        if name not in POLICIES or name.endswith(":"):
-            parser.error(
-                f"--baselines {b!r} is invalid: analytic controllers are "
-                f"{', '.join(k for k in POLICIES if not k.endswith(':'))}"
-            )
-        if "@" in b:
-            try:
-                if float(b.split("@", 1)[1]) <= 0:
-                    raise ValueError
-            except ValueError:
-                parser.error(f"--baselines {b!r} is invalid: LIMIT after @ must be a number > 0")
+        _check_baseline(b, parser)
     try:
         extra = dict(parse_assignment(s, "--set") for s in args.sets)
         _task_overrides(args.model)
     except (ValueError, FileNotFoundError) as e:
         parser.error(str(e))
     return extra
+
+
+def _check_baseline(b: str, parser: argparse.ArgumentParser) -> None:
+    """``--baselines`` entry ``NAME[:GAINS][@LIMIT]``: a registered analytic controller, gains
+    it accepts and a positive limit; ``parser.error`` naming the entry otherwise."""
+    from baselines import POLICIES, make_pair_policy
+    from pairflock_env import make_config
+
+    head, at, limit = b.rpartition("@") if "@" in b else (b, "", "")
+    name = head.split(":", 1)[0]
+    if name not in POLICIES or name.endswith(":"):
+        parser.error(
+            f"--baselines {b!r} is invalid: analytic controllers are "
+            f"{', '.join(k for k in POLICIES if not k.endswith(':'))}"
+        )
+    if at:
+        try:
+            if float(limit) <= 0:
+                raise ValueError
+        except ValueError:
+            parser.error(f"--baselines {b!r} is invalid: LIMIT after @ must be a number > 0")
+    try:
+        spec = parse_policy(head)
+        make_pair_policy(spec.name, make_config("paper"), **dict(spec.gains))
+    except (TypeError, ValueError) as e:
+        parser.error(f"--baselines {b!r} is invalid: {e}")
 
 
 def _run(args, policies: list[str], seeds: list[int], extra) -> list[dict[str, Any]]:
