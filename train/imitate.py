@@ -1,7 +1,8 @@
 """Imitation warm start: clone an analytic pair controller into the run's policy network.
 
-    python -m train.imitate --config pair_safe_a50 --teacher braking --seeds 0 1 2 3 4 \\
-        --workers 2 --out runs/imitate_safe
+    python -m train.imitate --config pair_safe_a50 --teacher braking --gain detour=80 \\
+        --seeds 0 1 2 3 4 --workers 2 --set safety_brake_accel=40 \\
+        --set safety_other_accel=20 --out runs/imitate_safe
 
 builds the run of a training config for each seed (its task or task mix, learning interface,
 network and seed, exactly as ``python -m train`` would; ``init_model`` is ignored) and fits
