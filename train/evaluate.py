@@ -58,6 +58,12 @@ def _task_overrides(model_path: Path) -> tuple[str, dict[str, Any]]:
     return s.preset, s.eval_overrides()
 
 
+def split_limit(policy: str) -> tuple[str, str | None]:
+    """``NAME[:GAINS][@LIMIT]`` as (``NAME[:GAINS]``, ``LIMIT`` text or None)."""
+    head, at, limit = policy.rpartition("@")
+    return (head, limit) if at else (policy, None)
+
+
 def run_job(
     model_path: str, policy: str, n_uavs: int, init: str, seeds: list[int], extra: dict[str, Any]
 ) -> list[dict[str, Any]]:
@@ -69,17 +75,15 @@ def run_job(
 
     preset, over = _task_overrides(Path(model_path))
     over = {**over, "n_uavs": n_uavs, "init": init, **extra}
-    name, label, gains = policy, policy, {}
-    if "@" in policy:
-        name, limit = policy.rsplit("@", 1)
+    name, limit = split_limit(policy)
+    if limit is not None:
         over["pair_accel_limit"] = float(limit)
     cfg = make_config(preset, **over)
     if name == "learned":
-        name = f"sb3:{model_path}"
+        pol = make_pair_policy(f"sb3:{model_path}", cfg)
     else:
         spec = parse_policy(name)
-        name, gains = spec.name, dict(spec.gains)
-    pol = make_pair_policy(name, cfg, **gains)
+        pol = make_pair_policy(spec.name, cfg, **dict(spec.gains))
     t0 = time.perf_counter()
     rows = trace_metrics(rollout(cfg, pol, seeds))
     wall = time.perf_counter() - t0
@@ -87,7 +91,7 @@ def run_job(
         {
             "n_uavs": n_uavs,
             "init": init,
-            "policy": label,
+            "policy": policy,
             "pair_accel_limit": cfg.pair_accel_limit,
             "wall_s": round(wall, 2),
             **r,
@@ -219,14 +223,14 @@ def _check_baseline(b: str, parser: argparse.ArgumentParser) -> None:
     from baselines import POLICIES, make_pair_policy
     from pairflock_env import make_config
 
-    head, at, limit = b.rpartition("@") if "@" in b else (b, "", "")
+    head, limit = split_limit(b)
     name = head.split(":", 1)[0]
     if name not in POLICIES or name.endswith(":"):
         parser.error(
             f"--baselines {b!r} is invalid: analytic controllers are "
             f"{', '.join(k for k in POLICIES if not k.endswith(':'))}"
         )
-    if at:
+    if limit is not None:
         try:
             if float(limit) <= 0:
                 raise ValueError
