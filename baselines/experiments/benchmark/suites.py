@@ -67,9 +67,9 @@ SUITES: dict[str, Suite] = {
     ),
     "safety": Suite(
         "the CBF safety filter off vs on: N = 20/50/100 x corners/random starts x smc, "
-        "proportional, learned (sb3:pair_n20_a50), 100 held-out seeds 30000-30099",
+        "proportional, the safe learned policy (sb3:pair_safe_a50), 100 held-out seeds 30000-30099",
         preset="paper",
-        policies=("smc", "proportional", "sb3:pair_n20_a50"),
+        policies=("smc", "proportional", "sb3:pair_safe_a50"),
         seeds=100,
         first_seed=30000,
         base=(("obs_neighbors", 12),),  # what the learned policy observes
