@@ -125,7 +125,8 @@ class PairFlockCore:
         self._agent_dm = sw.agent_dm  # (M,)
         self._leader = make_leader(cfg)
         self.vehicle = make_vehicle(cfg, B)
-        self.safety = SafetyStage(cfg, self.agent_uavs, B)  # stage 2b (safety_filter)
+        # stage 2b (safety_filter); the partner is constrained at any distance
+        self.safety = SafetyStage(cfg, self.agent_uavs, B, self.partner_uavs)
         self.q = np.zeros((B, N, D))
         self.p = np.zeros((B, N, D))
         self.t = np.zeros(B)

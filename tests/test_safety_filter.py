@@ -427,3 +427,44 @@ def test_active_means_a_barrier_constraint_and_correction_its_size():
     assert not out.active[1, 0] and out.correction[1, 0] == pytest.approx(30.0)
     assert out.active[2, 0] and out.u[2, 0, 0] < 0 and out.barrier[2, 0] < out.barrier[0, 0]
     assert out.correction[2, 0] == pytest.approx(np.linalg.norm(out.u[2, 0] - un[2, 0]))
+
+
+def test_partner_is_constrained_beyond_the_sensing_radius():
+    # Partners 30 m apart (beyond R_s = 20 m) closing at 300 m/s: their braking distance at
+    # 2 alpha = 1000 m/s^2 is 45 m, so by the time they are within 20 m no command within
+    # the bound can stop them. Given as partners, both start braking now.
+    P = SafetyParams(accel_limit=1000.0)
+    q = np.array([[[0.0, 0.0], [30.0, 0.0]]])
+    p = np.array([[[150.0, 0.0], [-150.0, 0.0]]])
+    f, un = np.zeros((1, 2, 2)), np.zeros((1, 2, 2))
+    blind = SafetyFilter(P, [0, 1], 2).apply(q, p, f, un)
+    assert not blind.active.any() and np.isinf(blind.barrier).all()
+    seen = SafetyFilter(P, [0, 1], 2, partners=[1, 0]).apply(q, p, f, un)
+    assert seen.active.all() and (seen.barrier < 0).all()
+    assert seen.u[0, 0, 0] < 0 < seen.u[0, 1, 0]  # each brakes away from the other
+    # the same closing run to the end: only the partner-aware filter keeps D_s
+    closest = {}
+    for name, mates in (("blind", None), ("seen", [1, 0])):
+        filt = SafetyFilter(P, [0, 1], 2, partners=mates)
+        x, v = q.copy(), p.copy()
+        dmin = np.inf
+        for _ in range(40):
+            out = filt.apply(x, v, f, un)
+            v = v + P.dt * out.u
+            x = x + P.dt * v
+            dmin = min(dmin, float(np.linalg.norm(x[0, 0] - x[0, 1])))
+        closest[name] = dmin
+    assert closest["seen"] >= P.safety_distance > closest["blind"]
+    # bad partners: wrong shape or dtype, an index out of range, the agent itself
+    for mates, exc in (([1], TypeError), ([1.0, 0.0], TypeError), ([2, 0], ValueError)):
+        with pytest.raises(exc, match="partners"):
+            SafetyFilter(P, [0, 1], 2, partners=mates)
+    with pytest.raises(ValueError, match="partners"):
+        SafetyFilter(P, [0, 1], 2, partners=[0, 0])
+
+
+def test_core_filter_senses_each_agents_partner():
+    from pairflock_env import PairFlockCore
+
+    core = PairFlockCore(make_config("paper", n_uavs=20, safety_filter="cbf"), num_envs=1)
+    assert np.array_equal(core.safety.filter.partners, core.partner_uavs)

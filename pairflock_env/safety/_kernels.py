@@ -307,8 +307,10 @@ def _sigma_min(e, v, eps, a, T, c, lam):
 
 
 @njit(cache=True, nogil=True)
-def _constraints(b, i, q, p, f, coop, Ds, alpha, A_o, R2, lam, T, c, U, G, rhs, n):
-    """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok)."""
+def _constraints(b, i, mate, q, p, f, coop, Ds, alpha, A_o, R2, lam, T, c, U, G, rhs, n):
+    """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok).
+    UAV ``mate`` (the partner; -1: none) is constrained at any distance, the others only
+    within the sensing radius."""
     N, D = q.shape[1], q.shape[2]
     K = 0
     hmin = np.inf
@@ -328,7 +330,7 @@ def _constraints(b, i, q, p, f, coop, Ds, alpha, A_o, R2, lam, T, c, U, G, rhs, 
             w2 += (p[b, i, k] - p[b, j, k]) ** 2
         if not (np.isfinite(d2) and np.isfinite(w2)):
             return 0, np.nan, False
-        if d2 >= R2:
+        if d2 >= R2 and j != mate:
             continue
         d = np.sqrt(d2)
         for k in range(D):
@@ -359,7 +361,7 @@ def _constraints(b, i, q, p, f, coop, Ds, alpha, A_o, R2, lam, T, c, U, G, rhs, 
 
 
 @njit(cache=True, nogil=True)
-def _filter_kernel(q, p, f, un, agents, coop, pr, u, active, corr, infeas, hmin):
+def _filter_kernel(q, p, f, un, agents, mates, coop, pr, u, active, corr, infeas, hmin):
     B, M, D = un.shape
     N = q.shape[1]
     Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
@@ -375,7 +377,24 @@ def _filter_kernel(q, p, f, un, agents, coop, pr, u, active, corr, infeas, hmin)
     for b in range(B):
         for m in range(M):
             K, h, ok = _constraints(
-                b, agents[m], q, p, f[b, m], coop, Ds, alpha, A_o, R2, lam, T, c, U, G, rhs, nv
+                b,
+                agents[m],
+                mates[m],
+                q,
+                p,
+                f[b, m],
+                coop,
+                Ds,
+                alpha,
+                A_o,
+                R2,
+                lam,
+                T,
+                c,
+                U,
+                G,
+                rhs,
+                nv,
             )
             hmin[b, m] = h
             for k in range(D):

@@ -75,15 +75,25 @@ class SafetyFilter:
         params: a :class:`SafetyParams`.
         agents: (M,) UAV index of each filtered (paired) UAV.
         n_uavs: N, the number of UAVs per swarm.
+        partners: optional (M,) UAV index of each agent's partner (-1: none), constrained at
+            any distance: the pair controller senses its partner over the pair's link
+            whatever their distance, so the partner need not enter the sensing radius on the
+            safe side. None: no partners (every UAV only within the radius).
 
     Every UAV listed in ``agents`` runs this filter, so against each other (partners
     included) they split the constraint in halves; the other UAVs are assumed to accelerate
     towards an agent at most ``other_accel``. Agent i uses only the relative positions and
-    velocities of UAVs closer than ``sensing_radius``, its own flocking command and its
-    own bound.
+    velocities of its partner and of UAVs closer than ``sensing_radius``, its own flocking
+    command and its own bound.
     """
 
-    def __init__(self, params: SafetyParams, agents: npt.ArrayLike, n_uavs: int) -> None:
+    def __init__(
+        self,
+        params: SafetyParams,
+        agents: npt.ArrayLike,
+        n_uavs: int,
+        partners: npt.ArrayLike | None = None,
+    ) -> None:
         if not isinstance(params, SafetyParams):
             raise TypeError(f"params={params!r} is invalid: must be a SafetyParams")
         if isinstance(n_uavs, bool) or not isinstance(n_uavs, (int, np.integer)) or n_uavs < 1:
@@ -96,6 +106,7 @@ class SafetyFilter:
         self.params = params
         self.n_uavs = int(n_uavs)
         self.agents = ag.astype(np.int64)
+        self.partners = self._partners(partners, self.agents, self.n_uavs)
         self.cooperative = np.zeros(self.n_uavs, np.bool_)
         self.cooperative[self.agents] = True
         P = params
@@ -151,8 +162,27 @@ class SafetyFilter:
         elif out.u.shape != shape:
             raise ValueError(f"out.u has shape {out.u.shape}, expected {shape}")
         o = out
-        _filter_kernel(q, p, f, un, self.agents, self.cooperative, self._pr, *o.arrays())
+        ag, mates = self.agents, self.partners
+        _filter_kernel(q, p, f, un, ag, mates, self.cooperative, self._pr, *o.arrays())
         return out
+
+    @staticmethod
+    def _partners(partners, agents: np.ndarray, n_uavs: int) -> np.ndarray:
+        if partners is None:
+            return np.full(agents.size, -1, np.int64)
+        mates = np.asarray(partners)
+        if mates.shape != agents.shape or mates.dtype.kind not in "iu":
+            raise TypeError(
+                f"partners must be a 1-D integer array like agents {agents.shape}, got "
+                f"{mates.dtype} {mates.shape}"
+            )
+        bad = (mates < -1) | (mates >= n_uavs) | (mates == agents)
+        if bad.any():
+            raise ValueError(
+                f"partners={mates.tolist()} is invalid: each must be -1 (none) or a UAV index "
+                f"in [0, {n_uavs}) other than the agent's own"
+            )
+        return mates.astype(np.int64)
 
     @staticmethod
     def _array(name, x, shape):
@@ -164,6 +194,9 @@ class SafetyFilter:
         return np.ascontiguousarray(a, dtype=np.float64)
 
 
-def safety_filter(params: SafetyParams, q, p, agents, flock_accel, u_nom) -> SafetyOutput:
+def safety_filter(
+    params: SafetyParams, q, p, agents, flock_accel, u_nom, partners=None
+) -> SafetyOutput:
     """One-call form of :meth:`SafetyFilter.apply` (builds the filter each call)."""
-    return SafetyFilter(params, agents, np.shape(q)[1]).apply(q, p, flock_accel, u_nom)
+    filt = SafetyFilter(params, agents, np.shape(q)[1], partners)
+    return filt.apply(q, p, flock_accel, u_nom)

@@ -31,9 +31,17 @@ class SafetyStage:
         config: the env config (section ``safety``; ``pair_accel_limit``, ``dt``, ...).
         agent_uavs: (M,) UAV index of each agent.
         num_envs: B.
+        partner_uavs: (M,) UAV index of each agent's partner (constrained at any distance);
+            None: only the UAVs within the sensing radius.
     """
 
-    def __init__(self, config: Any, agent_uavs: np.ndarray, num_envs: int) -> None:
+    def __init__(
+        self,
+        config: Any,
+        agent_uavs: np.ndarray,
+        num_envs: int,
+        partner_uavs: np.ndarray | None = None,
+    ) -> None:
         self.enabled = config.safety_filter == "cbf"
         B, M = int(num_envs), int(np.size(agent_uavs))
         self.agent_uavs = np.asarray(agent_uavs, dtype=np.int64)
@@ -41,7 +49,7 @@ class SafetyStage:
         self.output: SafetyOutput | None = None
         if self.enabled:
             params = SafetyParams.from_config(config)
-            self.filter = SafetyFilter(params, self.agent_uavs, config.n_uavs)
+            self.filter = SafetyFilter(params, self.agent_uavs, config.n_uavs, partner_uavs)
             self.output = self.filter.allocate(B, config.dim)
         self._shape = (B, M)
 
