@@ -45,7 +45,8 @@ class SafetyParams:
     (n . a_j <= A_o; for ``integrator="exact"`` or ``substeps > 1`` on its norm);
     0 <= A_o < alpha. None: 0.1 U."""
     sensing_radius: float = 20.0
-    """R_s (m): an agent constrains itself against the UAVs closer than this (> D_s)."""
+    """R_s (m): an agent constrains itself against the UAVs closer than this (> D_s), and
+    against its partner (``SafetyFilter(partners=...)``) at any distance."""
     decay: float = 0.5
     """lambda in (0, 1]: the discrete barrier condition is H(k+1) >= (1 - lambda) H(k);
     1 allows the state onto the braking curve in one step, smaller values approach it
@@ -142,7 +143,8 @@ class SafetyParams:
     def required_sensing_radius(self, closing_speed: float, cooperative: bool = False) -> float:
         """Smallest R_s (m) such that a UAV closing at ``closing_speed`` (m/s) or less is
         first sensed on the safe side of the barrier: D_s + V T + max(0, V - beta)^2 /
-        (2 alpha_ij), beta = (c - 1/2) alpha_ij T (docs/safety.md)."""
+        (2 alpha_ij), beta = (c - 1/2) alpha_ij T (docs/safety.md). It concerns the UAVs
+        other than the agent's partner, which the filter senses at any distance."""
         v = _real("closing_speed", closing_speed)
         a = self.barrier_accel(cooperative)
         beta = (self.position_gain - 0.5) * a * self.dt

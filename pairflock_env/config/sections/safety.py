@@ -89,8 +89,8 @@ SAFETY = Section(
             Real(1e-3, MAX_DISTANCE),
             20.0,
             "m",
-            "A paired UAV constrains its command against the UAVs closer than this; above "
-            "safety_distance.",
+            "A paired UAV constrains its command against the UAVs closer than this (and "
+            "against its partner at any distance); above safety_distance.",
         ),
         Field(
             "safety_decay",
