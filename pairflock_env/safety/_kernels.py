@@ -365,9 +365,6 @@ def _filter_kernel(q, p, f, un, agents, mates, coop, pr, u, active, corr, infeas
     B, M, D = un.shape
     N = q.shape[1]
     Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
-    Wv = pr[8]  # the vehicle's bound on ||f + u|| (inf: none)
-    rhs2 = np.zeros(max(N, 1))
-    vin = np.zeros(3)
     G = np.zeros((max(N, 1), 3))
     rhs = np.zeros(max(N, 1))
     W = np.zeros((4, 4, 4))
@@ -405,23 +402,7 @@ def _filter_kernel(q, p, f, un, agents, mates, coop, pr, u, active, corr, infeas
             violated = True
             if ok:
                 violated = _margin(G, rhs, K, D, uin) < 0.0
-                done = False
-                if Wv < np.inf:  # solve for v = f + u within the vehicle's ball
-                    for k in range(D):
-                        vin[k] = uin[k] + f[b, m, k]
-                    for kk in range(K):
-                        acc = rhs[kk]
-                        for k in range(D):
-                            acc += G[kk, k] * f[b, m, k]
-                        rhs2[kk] = acc
-                    status, _ = _solve(vin, G, rhs2, K, Wv, D, W, idx, cand, best, uo)
-                    n2 = 0.0
-                    for k in range(D):
-                        uo[k] -= f[b, m, k]
-                        n2 += uo[k] * uo[k]
-                    done = n2 <= U * U * (1.0 + 1e-12)  # else: the command's own bound
-                if not done:
-                    status, _ = _solve(uin, G, rhs, K, U, D, W, idx, cand, best, uo)
+                status, _ = _solve(uin, G, rhs, K, U, D, W, idx, cand, best, uo)
             else:  # non-finite state (a diverged swarm): pass the command through
                 status = STATUS_INFEASIBLE
                 uo[:D] = uin[:D]

@@ -120,7 +120,6 @@ class SafetyFilter:
                 P.dt,
                 P.position_gain,
                 P.accel_limit,
-                np.inf if P.vehicle_accel_limit is None else P.vehicle_accel_limit,
             ]
         )
 

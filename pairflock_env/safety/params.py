@@ -39,13 +39,11 @@ class SafetyParams:
     """D_s (m): the distance every paired UAV keeps from every other UAV."""
     brake_accel: float | None = None
     """alpha (m/s^2): the line-of-sight deceleration a paired UAV counts on from its own
-    acceleration f_i + u_i when it has to brake; 0 < alpha <= accel_limit. None: 0.5 U, or
-    0.5 min(U, W) with a vehicle bound W (a larger alpha than W makes braking steps
-    infeasible, reported)."""
+    acceleration f_i + u_i when it has to brake; 0 < alpha <= accel_limit. None: 0.5 U."""
     other_accel: float | None = None
     """A_o (m/s^2): assumed bound on an unpaired UAV's acceleration towards the agent
     (n . a_j <= A_o; for ``integrator="exact"`` or ``substeps > 1`` on its norm);
-    0 <= A_o < alpha. None: 0.1 U, or 0.1 min(U, W) with a vehicle bound W."""
+    0 <= A_o < alpha. None: 0.1 U."""
     sensing_radius: float = 20.0
     """R_s (m): an agent constrains itself against the UAVs closer than this (> D_s), and
     against its partner (``SafetyFilter(partners=...)``) at any distance."""
@@ -59,11 +57,6 @@ class SafetyParams:
     """Physics steps per control period of the semi-implicit Euler integrator."""
     integrator: str = "semi_implicit"
     """The env's particle integrator: ``"semi_implicit"`` or ``"exact"``."""
-    vehicle_accel_limit: float | None = None
-    """W (m/s^2): the vehicle's own bound on its total desired acceleration ||f_i + u_i||
-    (the quadrotor's ``quad_accel_limit``, which scales a larger command down); the filter
-    then picks the command within that ball too, so that the braking it counts on is
-    realised. None: no such bound (the particle)."""
 
     def __post_init__(self) -> None:
         put = object.__setattr__
@@ -76,22 +69,13 @@ class SafetyParams:
             if v <= 0:
                 raise ValueError(f"{name}={getattr(self, name)!r} is invalid: must be > 0")
             put(self, name, v)
-        W = self.vehicle_accel_limit
-        if W is not None:
-            W = _real("vehicle_accel_limit", W)
-            if W <= 0:
-                raise ValueError(
-                    f"vehicle_accel_limit={self.vehicle_accel_limit!r} is invalid: must be > 0"
-                )
-            put(self, "vehicle_accel_limit", W)
-        lim = U if W is None else min(U, W)
-        a = 0.5 * lim if self.brake_accel is None else _real("brake_accel", self.brake_accel)
+        a = 0.5 * U if self.brake_accel is None else _real("brake_accel", self.brake_accel)
         if not 0 < a <= U:
             raise ValueError(
                 f"brake_accel={self.brake_accel!r} is invalid: must be in (0, accel_limit={U}]"
             )
         put(self, "brake_accel", a)
-        o = 0.1 * lim if self.other_accel is None else _real("other_accel", self.other_accel)
+        o = 0.1 * U if self.other_accel is None else _real("other_accel", self.other_accel)
         if not 0 <= o < a:
             raise ValueError(
                 f"other_accel={self.other_accel!r} is invalid: must be in [0, brake_accel={a})"
@@ -122,8 +106,7 @@ class SafetyParams:
     @classmethod
     def from_config(cls, config: Any, **overrides: Any) -> SafetyParams:
         """Parameters for an env config: ``accel_limit = pair_accel_limit``, the config's
-        ``dt``, ``substeps``, ``integrator``, ``vehicle_accel_limit = quad_accel_limit``
-        for the quadrotor, and its ``safety_*`` fields (section ``safety``:
+        ``dt``, ``substeps``, ``integrator`` and its ``safety_*`` fields (section ``safety``:
         ``safety_distance``, ``safety_brake_accel``, ``safety_other_accel``,
         ``safety_sensing_radius``, ``safety_decay``); keyword ``overrides`` replace any
         field."""
@@ -133,8 +116,6 @@ class SafetyParams:
             substeps=config.substeps,
             integrator=config.integrator,
         )
-        if getattr(config, "dynamics", "particle") == "quadrotor":
-            kw["vehicle_accel_limit"] = config.quad_accel_limit
         for name in ("safety_distance", "brake_accel", "other_accel", "sensing_radius", "decay"):
             key = name if name == "safety_distance" else f"safety_{name}"
             if hasattr(config, key):

@@ -20,26 +20,16 @@ OTHER_SHARE = 0.1
 
 
 def brake_accel(v: Any) -> float:
-    """alpha (m/s^2): ``safety_brake_accel``, or ``BRAKE_SHARE x pair_accel_limit`` (of the
-    smaller of it and ``quad_accel_limit`` for the quadrotor, whose own bound on the total
-    desired acceleration the filter respects)."""
+    """alpha (m/s^2): ``safety_brake_accel``, or ``BRAKE_SHARE x pair_accel_limit``."""
     if v.safety_brake_accel is None:
-        return BRAKE_SHARE * _budget(v)
+        return BRAKE_SHARE * v.pair_accel_limit
     return v.safety_brake_accel
 
 
-def _budget(v: Any) -> float:
-    """The acceleration the shares of the defaults apply to (m/s^2)."""
-    if v.dynamics == "quadrotor":
-        return min(v.pair_accel_limit, v.quad_accel_limit)
-    return v.pair_accel_limit
-
-
 def other_accel(v: Any) -> float:
-    """A_o (m/s^2): ``safety_other_accel``, or ``OTHER_SHARE x pair_accel_limit`` (of the
-    smaller of it and ``quad_accel_limit`` for the quadrotor)."""
+    """A_o (m/s^2): ``safety_other_accel``, or ``OTHER_SHARE x pair_accel_limit``."""
     if v.safety_other_accel is None:
-        return OTHER_SHARE * _budget(v)
+        return OTHER_SHARE * v.pair_accel_limit
     return v.safety_other_accel
 
 
@@ -80,10 +70,7 @@ SAFETY = Section(
         ),
         Field(
             "safety_brake_accel",
-            OrNone(
-                Real(0.0, MAX_GAIN, lo_open=True),
-                "0.5 pair_accel_limit (quadrotor: 0.5 min(pair_accel_limit, quad_accel_limit))",
-            ),
+            OrNone(Real(0.0, MAX_GAIN, lo_open=True), "0.5 pair_accel_limit"),
             None,
             "m/s^2",
             "Line-of-sight deceleration alpha a paired UAV counts on from its own acceleration "
@@ -91,10 +78,7 @@ SAFETY = Section(
         ),
         Field(
             "safety_other_accel",
-            OrNone(
-                Real(0.0, MAX_GAIN),
-                "0.1 pair_accel_limit (quadrotor: 0.1 min(pair_accel_limit, quad_accel_limit))",
-            ),
+            OrNone(Real(0.0, MAX_GAIN), "0.1 pair_accel_limit"),
             None,
             "m/s^2",
             "Assumed bound A_o on an unpaired UAV's acceleration towards a paired UAV; below "
@@ -132,9 +116,8 @@ def _other_below_brake(v: Any) -> str | None:
     a, o = brake_accel(v), other_accel(v)
     if not o < a:
         return (
-            f"must keep the other UAVs' bound safety_other_accel ({o:g} m/s^2) below the "
-            f"brake acceleration safety_brake_accel ({a:g} m/s^2; None: 0.1 and 0.5 of "
-            "pair_accel_limit, or of quad_accel_limit if smaller on the quadrotor)"
+            f"must keep the other UAVs' bound safety_other_accel ({o:g} m/s^2) below the brake "
+            f"acceleration safety_brake_accel ({a:g} m/s^2; None: 0.5 pair_accel_limit)"
         )
     return None
 
@@ -155,13 +138,7 @@ RULES = (
         "safety_brake_accel <= pair_accel_limit",
     ),
     Rule(
-        (
-            "safety_other_accel",
-            "safety_brake_accel",
-            "pair_accel_limit",
-            "dynamics",
-            "quad_accel_limit",
-        ),
+        ("safety_other_accel", "safety_brake_accel", "pair_accel_limit"),
         _other_below_brake,
         "safety_other_accel < the brake acceleration (each default or set)",
     ),
