@@ -68,7 +68,7 @@ def states(N: int, B: int, limit: float, params: dict):
     res = core.reset(seed=0)
     smc = SlidingModeController(cfg)
     ia = core.agent_uavs
-    filt = SafetyFilter(SafetyParams.from_config(cfg, **params), ia, N)
+    filt = SafetyFilter(SafetyParams.from_config(cfg, **params), ia, N, core.partner_uavs)
     buf = filt.allocate(B, cfg.dim)
 
     def nominal(obs):
