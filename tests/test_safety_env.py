@@ -55,6 +55,8 @@ def test_config_section_defaults_keep_the_filter_off():
         (dict(safety_brake_accel=0.0), ValueError, "safety_brake_accel=0.0 is invalid"),
         (dict(safety_other_accel=-1.0), ValueError, "safety_other_accel=-1.0 is invalid"),
         (dict(safety_sensing_radius=float("nan")), ValueError, "safety_sensing_radius=nan"),
+        (dict(safety_margin=-0.1), ValueError, "safety_margin=-0.1 is invalid"),
+        (dict(safety_margin=[0.1]), TypeError, "safety_margin=[0.1] is invalid"),
     ],
 )
 def test_bad_safety_fields_name_field_and_range(overrides, exc, start):
@@ -68,11 +70,13 @@ def test_cross_field_rules_are_checked_at_construction():
     with pytest.raises(ValueError, match=r"^safety_brake_accel=.* must be <= pair_accel_limit"):
         make_config("paper", safety_brake_accel=2 * limit)
     with pytest.raises(ValueError, match=r"^safety_other_accel=.* below the brake"):
-        make_config("paper", safety_other_accel=limit)  # default brake: half the limit
+        make_config("paper", safety_other_accel=limit)  # default brake: 0.8 of the limit
     with pytest.raises(ValueError, match=r"^safety_other_accel=.* below the brake"):
         make_config("paper", safety_brake_accel=10.0, safety_other_accel=10.0)
     with pytest.raises(ValueError, match=r"^safety_sensing_radius=.* above safety_distance"):
         make_config("paper", safety_sensing_radius=2.0, safety_distance=2.0)
+    with pytest.raises(ValueError, match=r"above safety_distance \+ safety_margin \(1 \+ 1.5 m\)"):
+        make_config("paper", safety_sensing_radius=2.0, safety_margin=1.5)
     # the defaults scale with pair_accel_limit, so a small budget stays valid
     assert make_config("paper", pair_accel_limit=1e-3, **CBF).safety_filter == "cbf"
 

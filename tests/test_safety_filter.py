@@ -352,7 +352,7 @@ def test_edge_states_stay_finite():
     q = np.zeros((4, 4, 2))
     p = np.zeros((4, 4, 2))
     q[0, 2] = q[0, 0]  # coincident with an unpaired UAV, at rest
-    q[1, 1] = [P.safety_distance, 0.0]  # partner at exactly D_s, at rest
+    q[1, 1] = [P.barrier_distance, 0.0]  # partner at exactly D_s + margin, at rest
     q[1, 2:] = [[30.0, 0.0], [0.0, 30.0]]
     q[2] = [[0, 0], [0, 0], [0, 0], [0, 0]]  # everyone coincident
     q[3] = [[0, 0], [50, 0], [0, 50], [50, 50]]  # nobody within the sensing radius
@@ -363,7 +363,7 @@ def test_edge_states_stay_finite():
     assert (np.linalg.norm(out.u, axis=-1) <= P.accel_limit * (1 + 1e-12)).all()
     assert np.isinf(out.barrier[3]).all() and not out.active[3].any()
     assert np.array_equal(out.u[3], un[3])
-    # at D_s at rest, pushing towards the partner is blocked, pushing away is not
+    # on the barrier at rest, pushing towards the partner is blocked, pushing away is not
     un2 = np.zeros((1, 2, 2))
     un2[0, 0] = [10.0, 0.0]
     o2 = filt.apply(q[1:2], p[1:2], np.zeros((1, 2, 2)), un2)
@@ -382,12 +382,15 @@ def test_edge_states_stay_finite():
 def test_params_validation_and_config():
     cfg = make_config("paper", pair_accel_limit=50.0)
     P = SafetyParams.from_config(cfg, sensing_radius=12.0)
-    assert (P.accel_limit, P.brake_accel, P.other_accel, P.dt) == (50.0, 25.0, 5.0, cfg.dt)
+    assert (P.accel_limit, P.brake_accel, P.other_accel, P.dt) == (50.0, 40.0, 20.0, cfg.dt)
+    assert (P.safety_distance, P.margin, P.barrier_distance) == (1.0, 0.01, 1.01)
+    Q = SafetyParams.from_config(make_config("paper", safety_margin=0.25, safety_distance=2.0))
+    assert (Q.margin, Q.barrier_distance, Q.brake_accel) == (0.25, 2.25, 0.8 * Q.accel_limit)
     assert P.position_gain == 1.0
     assert SafetyParams(accel_limit=1.0, integrator="exact").position_gain == 0.5
     assert SafetyParams(accel_limit=1.0, substeps=3).position_gain == pytest.approx(2 / 3)
     r = P.required_sensing_radius(20.0)
-    assert r == pytest.approx(1.0 + 0.2 + (20.0 - 0.5 * 20.0 * 0.01) ** 2 / 40.0)
+    assert r == pytest.approx(1.01 + 0.2 + (20.0 - 0.5 * 20.0 * 0.01) ** 2 / 40.0)
     with pytest.raises(TypeError, match="unknown safety parameter"):
         SafetyParams.from_config(cfg, gamma=1.0)
     bad = [
@@ -396,6 +399,9 @@ def test_params_validation_and_config():
         (dict(accel_limit=1.0, brake_accel=2.0), ValueError),
         (dict(accel_limit=1.0, brake_accel=0.5, other_accel=0.5), ValueError),
         (dict(accel_limit=1.0, sensing_radius=0.5), ValueError),
+        (dict(accel_limit=1.0, margin=-0.01), ValueError),
+        (dict(accel_limit=1.0, margin="0.1"), TypeError),
+        (dict(accel_limit=1.0, margin=float("inf")), ValueError),
         (dict(accel_limit=1.0, decay=0.0), ValueError),
         (dict(accel_limit=1.0, substeps=1.5), TypeError),
         (dict(accel_limit=1.0, integrator="rk4"), ValueError),
@@ -404,6 +410,8 @@ def test_params_validation_and_config():
     for kw, exc in bad:
         with pytest.raises(exc, match=next(k for k in kw if k != "accel_limit" or len(kw) == 1)):
             SafetyParams(**kw)
+    with pytest.raises(ValueError, match=r"sensing_radius=1.2 .*safety_distance \+ margin = 1.5"):
+        SafetyParams(accel_limit=1.0, margin=0.5, sensing_radius=1.2)
     filt = SafetyFilter(P, [0, 1], 3)
     z = np.zeros((1, 3, 2))
     with pytest.raises(ValueError, match="u_nom"):
@@ -433,7 +441,7 @@ def test_partner_is_constrained_beyond_the_sensing_radius():
     # Partners 30 m apart (beyond R_s = 20 m) closing at 300 m/s: their braking distance at
     # 2 alpha = 1000 m/s^2 is 45 m, so by the time they are within 20 m no command within
     # the bound can stop them. Given as partners, both start braking now.
-    P = SafetyParams(accel_limit=1000.0)
+    P = SafetyParams(accel_limit=1000.0, brake_accel=500.0)
     q = np.array([[[0.0, 0.0], [30.0, 0.0]]])
     p = np.array([[[150.0, 0.0], [-150.0, 0.0]]])
     f, un = np.zeros((1, 2, 2)), np.zeros((1, 2, 2))

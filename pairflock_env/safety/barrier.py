@@ -2,7 +2,8 @@
 exact QCQP of :mod:`.qp`. The derivation is in docs/safety.md; in brief:
 
 For agent i and a sensed UAV j let x = q_i - q_j, d = ||x||, n = x / d, w = p_i - p_j,
-v = n . w (range rate), e = d - D_s, and sigma = n . (a_i - a_j) the line-of-sight part of
+v = n . w (range rate), e = d - D_s (here D_s is the barrier distance
+safety_distance + margin), and sigma = n . (a_i - a_j) the line-of-sight part of
 the relative acceleration held over the control period T. The barrier
 
     H(e, v) = sgn(e) sqrt(2 alpha_ij |e|) + v + beta,    beta = (c - 1/2) alpha_ij T,
@@ -112,7 +113,7 @@ class SafetyFilter:
         P = params
         self._pr = np.array(
             [
-                P.safety_distance,
+                P.barrier_distance,
                 P.brake_accel,
                 P.other_accel,
                 P.sensing_radius**2,

@@ -7,6 +7,8 @@ import math
 import numbers
 from typing import Any
 
+from ..config.sections.safety import BRAKE_SHARE, OTHER_SHARE
+
 __all__ = ["INTEGRATORS", "SafetyParams"]
 
 #: particle integrators the discrete-time barrier is derived for (see docs/safety.md)
@@ -26,7 +28,7 @@ def _real(name: str, v: Any) -> float:
 class SafetyParams:
     """Parameters of the braking-distance CBF filter (units in each field's doc).
 
-    ``brake_accel`` and ``other_accel`` default to 0.5 and 0.1 of ``accel_limit``. Every
+    ``brake_accel`` and ``other_accel`` default to 0.8 and 0.4 of ``accel_limit``. Every
     field is validated on construction (``TypeError`` for a non-number, ``ValueError`` for a
     bad value); :meth:`from_config` takes ``accel_limit``, ``dt``, ``substeps`` and
     ``integrator`` from an env config.
@@ -37,15 +39,20 @@ class SafetyParams:
     box); the filter's output always satisfies it."""
     safety_distance: float = 1.0
     """D_s (m): the distance every paired UAV keeps from every other UAV."""
+    margin: float = 0.01
+    """delta (m): the barrier is built at :attr:`barrier_distance` = D_s + delta, a buffer
+    against small breaks of the assumptions (an unpaired UAV pushed towards the agent
+    harder than ``other_accel``, docs/safety.md); >= 0."""
     brake_accel: float | None = None
     """alpha (m/s^2): the line-of-sight deceleration a paired UAV counts on from its own
-    acceleration f_i + u_i when it has to brake; 0 < alpha <= accel_limit. None: 0.5 U."""
+    acceleration f_i + u_i when it has to brake; 0 < alpha <= accel_limit. None: 0.8 U."""
     other_accel: float | None = None
     """A_o (m/s^2): assumed bound on an unpaired UAV's acceleration towards the agent
     (n . a_j <= A_o; for ``integrator="exact"`` or ``substeps > 1`` on its norm);
-    0 <= A_o < alpha. None: 0.1 U."""
+    0 <= A_o < alpha. None: 0.4 U."""
     sensing_radius: float = 20.0
-    """R_s (m): an agent constrains itself against the UAVs closer than this (> D_s), and
+    """R_s (m): an agent constrains itself against the UAVs closer than this (> D_s +
+    delta), and
     against its partner (``SafetyFilter(partners=...)``) at any distance."""
     decay: float = 0.5
     """lambda in (0, 1]: the discrete barrier condition is H(k+1) >= (1 - lambda) H(k);
@@ -69,23 +76,27 @@ class SafetyParams:
             if v <= 0:
                 raise ValueError(f"{name}={getattr(self, name)!r} is invalid: must be > 0")
             put(self, name, v)
-        a = 0.5 * U if self.brake_accel is None else _real("brake_accel", self.brake_accel)
+        a = BRAKE_SHARE * U if self.brake_accel is None else _real("brake_accel", self.brake_accel)
         if not 0 < a <= U:
             raise ValueError(
                 f"brake_accel={self.brake_accel!r} is invalid: must be in (0, accel_limit={U}]"
             )
         put(self, "brake_accel", a)
-        o = 0.1 * U if self.other_accel is None else _real("other_accel", self.other_accel)
+        o = OTHER_SHARE * U if self.other_accel is None else _real("other_accel", self.other_accel)
         if not 0 <= o < a:
             raise ValueError(
                 f"other_accel={self.other_accel!r} is invalid: must be in [0, brake_accel={a})"
             )
         put(self, "other_accel", o)
+        m = _real("margin", self.margin)
+        if m < 0:
+            raise ValueError(f"margin={self.margin!r} is invalid: must be >= 0")
+        put(self, "margin", m)
         r = _real("sensing_radius", self.sensing_radius)
-        if not r > self.safety_distance:
+        if not r > self.safety_distance + m:
             raise ValueError(
                 f"sensing_radius={self.sensing_radius!r} is invalid: must exceed "
-                f"safety_distance={self.safety_distance}"
+                f"safety_distance + margin = {self.safety_distance + m:g}"
             )
         put(self, "sensing_radius", r)
         lam = _real("decay", self.decay)
@@ -107,16 +118,23 @@ class SafetyParams:
     def from_config(cls, config: Any, **overrides: Any) -> SafetyParams:
         """Parameters for an env config: ``accel_limit = pair_accel_limit``, the config's
         ``dt``, ``substeps``, ``integrator`` and its ``safety_*`` fields (section ``safety``:
-        ``safety_distance``, ``safety_brake_accel``, ``safety_other_accel``,
-        ``safety_sensing_radius``, ``safety_decay``); keyword ``overrides`` replace any
-        field."""
+        ``safety_distance``, ``safety_margin``, ``safety_brake_accel``,
+        ``safety_other_accel``, ``safety_sensing_radius``, ``safety_decay``); keyword
+        ``overrides`` replace any field."""
         kw = dict(
             accel_limit=config.pair_accel_limit,
             dt=config.dt,
             substeps=config.substeps,
             integrator=config.integrator,
         )
-        for name in ("safety_distance", "brake_accel", "other_accel", "sensing_radius", "decay"):
+        for name in (
+            "safety_distance",
+            "margin",
+            "brake_accel",
+            "other_accel",
+            "sensing_radius",
+            "decay",
+        ):
             key = name if name == "safety_distance" else f"safety_{name}"
             if hasattr(config, key):
                 kw[name] = getattr(config, key)
@@ -126,6 +144,11 @@ class SafetyParams:
             raise TypeError(f"unknown safety parameter(s) {unknown}; valid: {sorted(names)}")
         kw.update(overrides)
         return cls(**kw)
+
+    @property
+    def barrier_distance(self) -> float:
+        """D_s + delta (m): the distance the barrier keeps (``safety_distance + margin``)."""
+        return self.safety_distance + self.margin
 
     @property
     def position_gain(self) -> float:
@@ -142,10 +165,10 @@ class SafetyParams:
 
     def required_sensing_radius(self, closing_speed: float, cooperative: bool = False) -> float:
         """Smallest R_s (m) such that a UAV closing at ``closing_speed`` (m/s) or less is
-        first sensed on the safe side of the barrier: D_s + V T + max(0, V - beta)^2 /
+        first sensed on the safe side of the barrier: D_s + delta + V T + max(0, V - beta)^2 /
         (2 alpha_ij), beta = (c - 1/2) alpha_ij T (docs/safety.md). It concerns the UAVs
         other than the agent's partner, which the filter senses at any distance."""
         v = _real("closing_speed", closing_speed)
         a = self.barrier_accel(cooperative)
         beta = (self.position_gain - 0.5) * a * self.dt
-        return self.safety_distance + v * self.dt + max(0.0, v - beta) ** 2 / (2 * a)
+        return self.barrier_distance + v * self.dt + max(0.0, v - beta) ** 2 / (2 * a)

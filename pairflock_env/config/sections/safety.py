@@ -11,12 +11,13 @@ from ..fields import Choice, Field, OrNone, Real
 from ..limits import MAX_DISTANCE, MAX_GAIN
 from ..schema import Rule, Section
 
-__all__ = ["RULES", "SECTIONS", "brake_accel", "other_accel"]
+__all__ = ["BRAKE_SHARE", "OTHER_SHARE", "RULES", "SECTIONS", "brake_accel", "other_accel"]
 
 #: share of ``pair_accel_limit`` a paired UAV counts on for braking when unset
-BRAKE_SHARE = 0.5
-#: share of ``pair_accel_limit`` assumed for unpaired UAVs' acceleration when unset
-OTHER_SHARE = 0.1
+BRAKE_SHARE = 0.8
+#: share of ``pair_accel_limit`` assumed for unpaired UAVs' acceleration when unset; the
+#: barrier against an unpaired UAV brakes at (BRAKE_SHARE - OTHER_SHARE) pair_accel_limit
+OTHER_SHARE = 0.4
 
 
 def brake_accel(v: Any) -> float:
@@ -69,8 +70,16 @@ SAFETY = Section(
             "Distance D_s every paired UAV keeps from every other UAV with the filter on.",
         ),
         Field(
+            "safety_margin",
+            Real(0.0, MAX_DISTANCE),
+            0.01,
+            "m",
+            "Buffer delta: the barrier keeps safety_distance + safety_margin, which absorbs "
+            "small breaks of the filter's assumptions (docs/safety.md).",
+        ),
+        Field(
             "safety_brake_accel",
-            OrNone(Real(0.0, MAX_GAIN, lo_open=True), "0.5 pair_accel_limit"),
+            OrNone(Real(0.0, MAX_GAIN, lo_open=True), "0.8 pair_accel_limit"),
             None,
             "m/s^2",
             "Line-of-sight deceleration alpha a paired UAV counts on from its own acceleration "
@@ -78,7 +87,7 @@ SAFETY = Section(
         ),
         Field(
             "safety_other_accel",
-            OrNone(Real(0.0, MAX_GAIN), "0.1 pair_accel_limit"),
+            OrNone(Real(0.0, MAX_GAIN), "0.4 pair_accel_limit"),
             None,
             "m/s^2",
             "Assumed bound A_o on an unpaired UAV's acceleration towards a paired UAV; below "
@@ -90,7 +99,7 @@ SAFETY = Section(
             20.0,
             "m",
             "A paired UAV constrains its command against the UAVs closer than this (and "
-            "against its partner at any distance); above safety_distance.",
+            "against its partner at any distance); above safety_distance + safety_margin.",
         ),
         Field(
             "safety_decay",
@@ -117,16 +126,16 @@ def _other_below_brake(v: Any) -> str | None:
     if not o < a:
         return (
             f"must keep the other UAVs' bound safety_other_accel ({o:g} m/s^2) below the brake "
-            f"acceleration safety_brake_accel ({a:g} m/s^2; None: 0.5 pair_accel_limit)"
+            f"acceleration safety_brake_accel ({a:g} m/s^2; None: 0.8 pair_accel_limit)"
         )
     return None
 
 
 def _radius_beyond_distance(v: Any) -> str | None:
-    if not v.safety_sensing_radius > v.safety_distance:
+    if not v.safety_sensing_radius > v.safety_distance + v.safety_margin:
         return (
             f"must keep safety_sensing_radius ({v.safety_sensing_radius:g} m) above "
-            f"safety_distance ({v.safety_distance:g} m)"
+            f"safety_distance + safety_margin ({v.safety_distance:g} + {v.safety_margin:g} m)"
         )
     return None
 
@@ -143,8 +152,8 @@ RULES = (
         "safety_other_accel < the brake acceleration (each default or set)",
     ),
     Rule(
-        ("safety_sensing_radius", "safety_distance"),
+        ("safety_sensing_radius", "safety_distance", "safety_margin"),
         _radius_beyond_distance,
-        "safety_sensing_radius > safety_distance",
+        "safety_sensing_radius > safety_distance + safety_margin",
     ),
 )
