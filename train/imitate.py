@@ -2,7 +2,7 @@
 
     python -m train.imitate --config pair_safe_a50 --teacher braking --gain detour=80 \\
         --seeds 0 1 2 3 4 --workers 2 --set safety_brake_accel=40 \\
-        --set safety_other_accel=20 --out runs/imitate_safe
+        --set safety_other_accel=20 --set safety_margin=0 --out runs/imitate_safe
 
 builds the run of a training config for each seed (its task or task mix, learning interface,
 network and seed, exactly as ``python -m train`` would; ``init_model`` is ignored) and fits
