@@ -77,6 +77,10 @@ def test_cross_field_rules_are_checked_at_construction():
         make_config("paper", safety_sensing_radius=2.0, safety_distance=2.0)
     with pytest.raises(ValueError, match=r"above safety_distance \+ safety_margin \(1 \+ 1.5 m\)"):
         make_config("paper", safety_sensing_radius=2.0, safety_margin=1.5)
+    with pytest.raises(ValueError, match=r"^safety_lookahead_range=10.* >= safety_sensing_radius"):
+        make_config("paper", safety_lookahead_range=10.0)
+    cfg = make_config("paper", safety_lookahead_range=100.0, **CBF)
+    assert SafetyParams.from_config(cfg).lookahead_range == 100.0
     # the defaults scale with pair_accel_limit, so a small budget stays valid
     assert make_config("paper", pair_accel_limit=1e-3, **CBF).safety_filter == "cbf"
 

@@ -476,3 +476,52 @@ def test_core_filter_senses_each_agents_partner():
 
     core = PairFlockCore(make_config("paper", n_uavs=20, safety_filter="cbf"), num_envs=1)
     assert np.array_equal(core.safety.filter.partners, core.partner_uavs)
+
+
+def test_lookahead_range_senses_fast_closers_beyond_the_radius():
+    # An unpaired UAV 30 m ahead (beyond R_s = 20 m) closing at 60 m/s: at alpha - A_o =
+    # 20 m/s^2 its braking distance is about 90 m, so by the time it is within 20 m no
+    # command within the bound can stop the agent. A slow one at the same place is not a
+    # concern there, and neither is a fast one beyond the lookahead range.
+    P = SafetyParams(accel_limit=50.0)
+    assert P.lookahead_range == P.sensing_radius  # None: no lookahead
+    L = dataclasses.replace(P, lookahead_range=100.0)
+    q = np.array([[[0.0, 0.0], [-50.0, 0.0], [30.0, 0.0]]])
+    f, un = np.zeros((1, 1, 2)), np.zeros((1, 1, 2))
+    fast = np.array([[[60.0, 0.0], [0.0, 0.0], [0.0, 0.0]]])  # UAV 1: behind, left behind
+    slow = np.array([[[5.0, 0.0], [0.0, 0.0], [0.0, 0.0]]])
+    assert np.isinf(SafetyFilter(P, [0], 3).apply(q, fast, f, un).barrier).all()
+    out = SafetyFilter(L, [0], 3).apply(q, fast, f, un)
+    assert out.active[0, 0] and out.u[0, 0, 0] < 0 and np.isfinite(out.barrier).all()
+    assert np.isinf(SafetyFilter(L, [0], 3).apply(q, slow, f, un).barrier).all()
+    far = q.copy()
+    far[0, 2, 0] = 120.0
+    assert np.isinf(SafetyFilter(L, [0], 3).apply(far, fast, f, un).barrier).all()
+    # it is sensed exactly once the radius condition fails at its distance
+    r = L.required_sensing_radius(60.0)
+    for dx, seen in ((r + 1e-6, False), (r - 1e-6, True)):
+        qq = q.copy()
+        qq[0, 2, 0] = dx
+        assert np.isfinite(SafetyFilter(L, [0], 3).apply(qq, fast, f, un).barrier[0, 0]) == seen
+    # the whole approach from 120 m: only the lookahead keeps D_s + margin
+    closest = {}
+    for name, params in (
+        ("radius", P),
+        ("lookahead", dataclasses.replace(L, lookahead_range=300.0)),
+    ):
+        filt = SafetyFilter(params, [0], 3)
+        x, v = far.copy(), fast.copy()
+        dmin = np.inf
+        for _ in range(300):
+            out = filt.apply(x, v, f, np.full((1, 1, 2), [50.0, 0.0]))
+            v[0, 0] += P.dt * out.u[0, 0]
+            x = x + P.dt * v
+            dmin = min(dmin, float(np.linalg.norm(x[0, 0] - x[0, 2])))
+        closest[name] = dmin
+    assert closest["lookahead"] >= P.barrier_distance - 1e-9 > P.safety_distance > closest["radius"]
+    for kw, exc in (
+        (dict(lookahead_range=10.0), ValueError),
+        (dict(lookahead_range="1"), TypeError),
+    ):
+        with pytest.raises(exc, match="lookahead_range"):
+            SafetyParams(accel_limit=50.0, **kw)

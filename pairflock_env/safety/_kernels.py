@@ -307,10 +307,19 @@ def _sigma_min(e, v, eps, a, T, c, lam):
 
 
 @njit(cache=True, nogil=True)
-def _constraints(b, i, mate, q, p, f, coop, Ds, alpha, A_o, R2, lam, T, c, U, G, rhs, n):
+def _entry_radius(V, a, Ds, T, c):
+    """Smallest distance at which a UAV closing at V (m/s, line of sight) is still on the
+    safe side of the barrier with braking a (radius condition (b), docs/safety.md)."""
+    x = max(0.0, V - (c - 0.5) * a * T)
+    return Ds + V * T + x * x / (2.0 * a)
+
+
+@njit(cache=True, nogil=True)
+def _constraints(b, i, mate, q, p, f, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, U, G, rhs, n):
     """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok).
-    UAV ``mate`` (the partner; -1: none) is constrained at any distance, the others only
-    within the sensing radius."""
+    UAV ``mate`` (the partner; -1: none) is constrained at any distance, the others within
+    the sensing radius, and beyond it up to the lookahead range (squared: RL2) those that
+    close fast enough for their braking distance to reach them."""
     N, D = q.shape[1], q.shape[2]
     K = 0
     hmin = np.inf
@@ -331,7 +340,15 @@ def _constraints(b, i, mate, q, p, f, coop, Ds, alpha, A_o, R2, lam, T, c, U, G,
         if not (np.isfinite(d2) and np.isfinite(w2)):
             return 0, np.nan, False
         if d2 >= R2 and j != mate:
-            continue
+            if d2 >= RL2:
+                continue
+            d = np.sqrt(d2)
+            V = 0.0  # closing speed along the line of sight
+            for k in range(D):
+                V -= (q[b, i, k] - q[b, j, k]) * (p[b, i, k] - p[b, j, k]) / d
+            a = 2.0 * alpha if coop[j] else alpha - A_o
+            if d >= _entry_radius(V, a, Ds, T, c):
+                continue  # the radius condition (b) still holds for it
         d = np.sqrt(d2)
         for k in range(D):
             n[k] = (q[b, i, k] - q[b, j, k]) / d if d > 0.0 else 0.0
@@ -365,6 +382,7 @@ def _filter_kernel(q, p, f, un, agents, mates, coop, pr, u, active, corr, infeas
     B, M, D = un.shape
     N = q.shape[1]
     Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
+    RL2 = pr[8]
     G = np.zeros((max(N, 1), 3))
     rhs = np.zeros(max(N, 1))
     W = np.zeros((4, 4, 4))
@@ -388,6 +406,7 @@ def _filter_kernel(q, p, f, un, agents, mates, coop, pr, u, active, corr, infeas
                 alpha,
                 A_o,
                 R2,
+                RL2,
                 lam,
                 T,
                 c,

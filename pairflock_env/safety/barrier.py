@@ -121,6 +121,7 @@ class SafetyFilter:
                 P.dt,
                 P.position_gain,
                 P.accel_limit,
+                P.lookahead_range**2,
             ]
         )
 

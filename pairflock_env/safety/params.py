@@ -8,6 +8,7 @@ import numbers
 from typing import Any
 
 from ..config.sections.safety import BRAKE_SHARE, OTHER_SHARE
+from ._kernels import _entry_radius
 
 __all__ = ["INTEGRATORS", "SafetyParams"]
 
@@ -54,6 +55,11 @@ class SafetyParams:
     """R_s (m): an agent constrains itself against the UAVs closer than this (> D_s +
     delta), and
     against its partner (``SafetyFilter(partners=...)``) at any distance."""
+    lookahead_range: float | None = None
+    """R_L (m): beyond R_s and up to this distance an agent also constrains itself against
+    every UAV that closes on it so fast that the radius condition (b) of docs/safety.md
+    fails at its distance: D_s + delta + V T + max(0, V - beta)^2 / (2 alpha_ij) > d (V: the
+    closing speed along the line of sight). None: R_s (no lookahead); >= R_s."""
     decay: float = 0.5
     """lambda in (0, 1]: the discrete barrier condition is H(k+1) >= (1 - lambda) H(k);
     1 allows the state onto the braking curve in one step, smaller values approach it
@@ -99,6 +105,14 @@ class SafetyParams:
                 f"safety_distance + margin = {self.safety_distance + m:g}"
             )
         put(self, "sensing_radius", r)
+        reach = self.lookahead_range
+        reach = r if reach is None else _real("lookahead_range", reach)
+        if reach < r:
+            raise ValueError(
+                f"lookahead_range={self.lookahead_range!r} is invalid: must be >= "
+                f"sensing_radius={r:g} (or None)"
+            )
+        put(self, "lookahead_range", reach)
         lam = _real("decay", self.decay)
         if not 0 < lam <= 1:
             raise ValueError(f"decay={self.decay!r} is invalid: must be in (0, 1]")
@@ -133,6 +147,7 @@ class SafetyParams:
             "brake_accel",
             "other_accel",
             "sensing_radius",
+            "lookahead_range",
             "decay",
         ):
             key = name if name == "safety_distance" else f"safety_{name}"
@@ -167,8 +182,8 @@ class SafetyParams:
         """Smallest R_s (m) such that a UAV closing at ``closing_speed`` (m/s) or less is
         first sensed on the safe side of the barrier: D_s + delta + V T + max(0, V - beta)^2 /
         (2 alpha_ij), beta = (c - 1/2) alpha_ij T (docs/safety.md). It concerns the UAVs
-        other than the agent's partner, which the filter senses at any distance."""
+        other than the agent's partner, which the filter senses at any distance; the filter
+        uses the same formula for ``lookahead_range``."""
         v = _real("closing_speed", closing_speed)
         a = self.barrier_accel(cooperative)
-        beta = (self.position_gain - 0.5) * a * self.dt
-        return self.barrier_distance + v * self.dt + max(0.0, v - beta) ** 2 / (2 * a)
+        return float(_entry_radius(v, a, self.barrier_distance, self.dt, self.position_gain))

@@ -102,6 +102,15 @@ SAFETY = Section(
             "against its partner at any distance); above safety_distance + safety_margin.",
         ),
         Field(
+            "safety_lookahead_range",
+            OrNone(Real(1e-3, MAX_DISTANCE), "safety_sensing_radius"),
+            None,
+            "m",
+            "Up to this distance a paired UAV also constrains its command against every UAV "
+            "beyond safety_sensing_radius that closes on it faster than the barrier can "
+            "brake for from where it is (docs/safety.md); None: no lookahead.",
+        ),
+        Field(
             "safety_decay",
             Real(0.0, 1.0, lo_open=True),
             0.5,
@@ -140,6 +149,13 @@ def _radius_beyond_distance(v: Any) -> str | None:
     return None
 
 
+def _lookahead_beyond_radius(v: Any) -> str | None:
+    reach = v.safety_lookahead_range
+    if reach is not None and reach < v.safety_sensing_radius:
+        return f"must be >= safety_sensing_radius ({v.safety_sensing_radius:g} m) or None"
+    return None
+
+
 RULES = (
     Rule(
         ("safety_brake_accel", "pair_accel_limit"),
@@ -155,5 +171,10 @@ RULES = (
         ("safety_sensing_radius", "safety_distance", "safety_margin"),
         _radius_beyond_distance,
         "safety_sensing_radius > safety_distance + safety_margin",
+    ),
+    Rule(
+        ("safety_lookahead_range", "safety_sensing_radius"),
+        _lookahead_beyond_radius,
+        "safety_lookahead_range >= safety_sensing_radius (or None)",
     ),
 )
