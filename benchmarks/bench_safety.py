@@ -157,9 +157,15 @@ def _timed(obj, name: str, acc: dict, label: str) -> None:
     setattr(obj, name, wrapper)
 
 
-def in_step(N: int, B: int, limit: float, steps: int) -> None:
+def in_step(N: int, B: int, limit: float, steps: int, lookahead: float | None = None) -> None:
     """Per-stage times of core.step with the filter on (module docstring)."""
-    cfg = make_config("paper", n_uavs=N, pair_accel_limit=limit, safety_filter="cbf")
+    cfg = make_config(
+        "paper",
+        n_uavs=N,
+        pair_accel_limit=limit,
+        safety_filter="cbf",
+        safety_lookahead_range=lookahead,
+    )
     core = PairFlockCore(cfg, num_envs=B)
     res = core.reset(seed=0)
     smc = SlidingModeController(cfg)
@@ -179,14 +185,15 @@ def in_step(N: int, B: int, limit: float, steps: int) -> None:
         parts["total core.step"] = total
         rows.append(parts)
         active.append(bool(res.info["safety_active"].any()))
-    _step_table(rows, np.array(active), N, B, limit, steps)
+    _step_table(rows, np.array(active), N, B, limit, steps, lookahead)
 
 
-def _step_table(rows, active, N, B, limit, steps) -> None:
+def _step_table(rows, active, N, B, limit, steps, lookahead) -> None:
+    look = "" if lookahead is None else f", safety_lookahead_range = {lookahead:g}"
     print(
         f"\n## Stages of core.step with safety_filter='cbf' (smc, N = {N}, B = {B}, "
-        f"pair_accel_limit = {limit:g}, {steps} steps from the reset; CPU time, medians over "
-        "steps)\n"
+        f"pair_accel_limit = {limit:g}{look}, {steps} steps from the reset; CPU time, medians "
+        "over steps)\n"
     )
     sel = {"all steps": np.ones(len(rows), bool), "steps with an active filter": active}
     print("| stage | " + " | ".join(f"{k} (ms)" for k in sel) + " |")
@@ -265,6 +272,9 @@ def main(argv=None) -> None:
         "--in-step", action="store_true", help="time the stages of a filtered core.step"
     )
     ap.add_argument("--steps", type=int, default=400, help="--in-step: control steps")
+    ap.add_argument(
+        "--lookahead", type=float, default=None, help="--in-step: safety_lookahead_range (m)"
+    )
     ap.add_argument("--vecenv", action="store_true", help="SB3 VecEnv throughput off vs on")
     args = ap.parse_args(argv)
     if args.vecenv:
@@ -274,7 +284,7 @@ def main(argv=None) -> None:
         assumptions(args.n)
         return
     if args.in_step:
-        in_step(args.n, args.b, args.limit, args.steps)
+        in_step(args.n, args.b, args.limit, args.steps, args.lookahead)
         return
     repeats, min_time = (5, 0.1) if args.quick else (15, 0.3)
     N, B = args.n, args.b
