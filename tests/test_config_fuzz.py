@@ -238,6 +238,21 @@ def check(base: str, overrides: dict[str, Any], route: str) -> None:
         run_briefly(cfg)
 
 
+@pytest.fixture(scope="module", autouse=True)
+def _compiled_kernels():
+    """Compile the numba kernels each base task reaches before any example is timed.
+
+    The hang guard is for configs that hang, not for JIT compilation: on a clean clone
+    (no numba cache) the first grid or safety-filter run of a dimension compiles for tens
+    of seconds on a 2-core machine, so whichever example came first would be timed on it."""
+    for preset, kw in BASES.values():
+        for dim in {make_config(preset, **kw).dim, 3}:
+            for search in ("all_pairs", "grid"):
+                for safety in ("none", "cbf"):
+                    over = dict(dim=dim, neighbor_search=search, safety_filter=safety)
+                    run_briefly(make_config(preset, **{**kw, **over}))
+
+
 _SETTINGS = dict(
     deadline=None,
     derandomize=True,
