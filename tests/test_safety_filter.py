@@ -180,29 +180,34 @@ def test_solver_examples_and_bad_input():
 # ----------------------------------------------------------------------------- the barrier
 
 
-def _next_ok(s, e, v, eps, a, T, c, lam, H, slack):
+def _next_ok(s, e, v, eps, a, T, c, lam, H, slack, tau=0.0):
     """The discrete barrier condition for the projected next state under sigma = s."""
     beta = (c - 0.5) * a * T
     e1, v1 = e + T * v + c * T * T * s, v + T * s - eps
-    H1 = np.sign(e1) * np.sqrt(2 * a * abs(e1)) + v1 + beta
-    return e1 >= min(e, 0) - slack and (1 - lam) * H - slack <= H1
+    g0, g1 = e + tau * v, e1 + tau * v1  # E and E+
+    H1 = np.sign(g1) * np.sqrt(2 * a * abs(g1)) + v1 + beta
+    gaps = e1 >= min(e, 0) - slack and g1 >= min(g0, 0) - slack
+    return gaps and (1 - lam) * H - slack <= H1
 
 
 def test_sigma_min_is_the_exact_threshold():
-    """sigma_min is the smallest sigma whose projected next state keeps H+ >= (1-lam) H and
-    e+ >= min(e, 0); full braking satisfies it whenever H >= 0 (recursive feasibility)."""
+    """sigma_min is the smallest sigma whose projected next state keeps H+ >= (1-lam) H,
+    E+ >= min(E, 0) and e+ >= min(e, 0) (E = e + tau v; tau = 0: E = e); full braking
+    satisfies it whenever H >= 0 (recursive feasibility)."""
     rng = np.random.default_rng(4)
-    for _ in range(2000):
+    for _ in range(3000):
         e = rng.choice([0.0, rng.exponential(5.0), -rng.exponential(0.5)])
         v, eps = rng.normal(0, 30), rng.choice([0.0, rng.exponential(1.0)])
         a, T, c, lam = rng.uniform(1, 500), 0.01, rng.choice([1.0, 0.75, 0.5]), rng.uniform(0.1, 1)
-        H, smin = _sigma_min(e, v, eps, a, T, c, lam)
-        H_ref = np.sign(e) * np.sqrt(2 * a * abs(e)) + v + (c - 0.5) * a * T
+        tau = rng.choice([0.0, rng.uniform(0.0, 0.3)])
+        H, smin = _sigma_min(e, v, eps, a, T, c, lam, tau)
+        E = e + tau * v
+        H_ref = np.sign(E) * np.sqrt(2 * a * abs(E)) + v + (c - 0.5) * a * T
         assert np.isfinite(smin) and abs(H - H_ref) <= 1e-12 * (1 + abs(H_ref))
         tol = 1e-9 * (1 + abs(smin) * T * T + abs(v) + a * T)
-        assert _next_ok(smin, e, v, eps, a, T, c, lam, H, tol)
-        assert not _next_ok(smin - 1e-6 * (1 + abs(smin)), e, v, eps, a, T, c, lam, H, -tol)
-        if H >= 0 and e >= 0 and eps == 0:
+        assert _next_ok(smin, e, v, eps, a, T, c, lam, H, tol, tau)
+        assert not _next_ok(smin - 1e-6 * (1 + abs(smin)), e, v, eps, a, T, c, lam, H, -tol, tau)
+        if H >= 0 and E >= 0 and e >= 0 and eps == 0:
             assert smin <= a * (1 + 1e-12)
 
 
@@ -231,7 +236,17 @@ def test_projection_bounds_of_the_next_state(S):
 
 
 def simulate(
-    seed, *, D=2, n_agents=1, n_obs=3, S=1, exact=False, factor=1.0, steps=300, rand=False
+    seed,
+    *,
+    D=2,
+    n_agents=1,
+    n_obs=3,
+    S=1,
+    exact=False,
+    factor=1.0,
+    steps=300,
+    rand=False,
+    tau=0.0,
 ):
     """Agents push at the bound straight at the nearest UAV; obstacles (unpaired) accelerate
     at factor * other_accel towards the nearest agent (or, ``rand``, in a random direction
@@ -242,7 +257,7 @@ def simulate(
     B, U, T = 48, 100.0, 0.01
     integ = "exact" if exact else "semi_implicit"
     P = SafetyParams(accel_limit=U, sensing_radius=1e3, substeps=S, integrator=integ)
-    P = dataclasses.replace(P, decay=float(rng.uniform(0.1, 1.0)))
+    P = dataclasses.replace(P, decay=float(rng.uniform(0.1, 1.0)), reaction_time=tau)
     N = n_agents + n_obs
     ag = np.arange(n_agents)
     filt = SafetyFilter(P, ag, N)
@@ -300,6 +315,8 @@ def simulate(
         dict(D=3, n_agents=2, n_obs=2, rand=True),
         dict(n_obs=2, S=4),
         dict(n_obs=2, exact=True),
+        dict(n_obs=1, tau=0.2),
+        dict(D=3, n_agents=2, n_obs=3, tau=0.1),
     ],
     ids=lambda kw: ",".join(f"{k}={v}" for k, v in kw.items()),
 )
@@ -310,7 +327,7 @@ def test_forward_invariance_under_the_assumptions(kw):
     kept = safe0 & (report > 300)
     assert kept.sum() >= 24  # not vacuous
     assert dmin[kept].min() >= 1.0 - 1e-9
-    if kw.get("n_obs", 0) + kw.get("n_agents", 1) == 2 and "S" not in kw and "exact" not in kw:
+    if kw.get("n_obs", 0) + kw.get("n_agents", 1) == 2 and not {"S", "exact", "tau"} & set(kw):
         assert not (safe0 & (report <= 300)).any()
         assert dmin[safe0].min() >= 1.0 - 1e-9
 
@@ -524,4 +541,45 @@ def test_lookahead_range_senses_fast_closers_beyond_the_radius():
         (dict(lookahead_range="1"), TypeError),
     ):
         with pytest.raises(exc, match="lookahead_range"):
+            SafetyParams(accel_limit=50.0, **kw)
+
+
+def test_reaction_time_brakes_ahead_of_an_actuation_lag():
+    # An agent pushes at the bound towards an unpaired UAV hovering 12 m ahead, but its
+    # commands act 10 control periods (0.1 s) late, as through a vehicle's attitude loop.
+    # The plain barrier brakes too late; with a reaction time of twice the lag it keeps
+    # D_s + margin (as every filter does when nothing lags). Measured alongside (not
+    # asserted): a slower rate alone (decay 0.02) also keeps it, at lags up to 0.2 s.
+    P = SafetyParams(accel_limit=50.0, decay=0.1)
+
+    def closest(params, delay):
+        filt = SafetyFilter(params, [0], 2)
+        x = np.array([[[0.0, 0.0], [12.0, 0.0]]])
+        v = np.zeros_like(x)
+        f, pipe, dmin = np.zeros((1, 1, 2)), [np.zeros(2)] * delay, np.inf
+        for _ in range(500):
+            out = filt.apply(x, v, f, np.full((1, 1, 2), [50.0, 0.0]))
+            pipe.append(out.u[0, 0].copy())
+            v[0, 0] += P.dt * pipe.pop(0)
+            x = x + P.dt * v
+            dmin = min(dmin, float(x[0, 1, 0] - x[0, 0, 0]))
+        return dmin
+
+    lag = 10
+    tau = dataclasses.replace(P, reaction_time=2 * lag * P.dt)
+    assert closest(P, lag) < P.safety_distance
+    assert closest(tau, lag) >= P.barrier_distance - 1e-9
+    assert min(closest(P, 0), closest(tau, 0)) >= P.barrier_distance - 1e-9
+    # tau = 0 is the plain barrier; for a closing UAV a reaction time shrinks the safe set
+    rng = np.random.default_rng(3)
+    for e, v in zip(rng.uniform(0, 5, 200), rng.uniform(-40, 40, 200), strict=True):
+        H0, s0 = _sigma_min(e, v, 0.0, 20.0, 0.01, 1.0, 0.5)
+        assert (H0, s0) == _sigma_min(e, v, 0.0, 20.0, 0.01, 1.0, 0.5, 0.0)
+        if v < 0:
+            assert _sigma_min(e, v, 0.0, 20.0, 0.01, 1.0, 0.5, 0.1)[0] <= H0
+    # the sensing radius a closing speed needs grows by V tau
+    T = dataclasses.replace(P, reaction_time=0.1)
+    assert T.required_sensing_radius(30.0) == pytest.approx(P.required_sensing_radius(30.0) + 3.0)
+    for kw, exc in ((dict(reaction_time=-0.1), ValueError), (dict(reaction_time="1"), TypeError)):
+        with pytest.raises(exc, match="reaction_time"):
             SafetyParams(accel_limit=50.0, **kw)

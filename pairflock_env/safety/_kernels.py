@@ -289,33 +289,39 @@ def _solve(un, G, b, K, U, D, W, idx, cand, u_best, out):
 
 
 @njit(cache=True, nogil=True)
-def _sigma_min(e, v, eps, a, T, c, lam):
+def _sigma_min(e, v, eps, a, T, c, lam, tau=0.0):
     """(H, sigma_min): the barrier and the smallest line-of-sight relative acceleration
-    that keeps H(next) >= (1 - lam) H and e(next) >= min(e, 0) (module docstring)."""
+    that keeps H(next) >= (1 - lam) H, E(next) >= min(E, 0) and e(next) >= min(e, 0)
+    (module docstring). With a reaction time tau the barrier is taken at the gap left
+    after coasting tau at the current range rate, E = e + tau v (tau = 0: E = e)."""
     beta = (c - 0.5) * a * T
-    H = np.sign(e) * np.sqrt(2.0 * a * abs(e)) + v + beta
+    E = e + tau * v
+    H = np.sign(E) * np.sqrt(2.0 * a * abs(E)) + v + beta
     K = v - eps + beta - (1.0 - lam) * H
-    cT2 = c * T * T
-    s0 = -(e + T * v) / cT2  # sigma at which the projected next distance is D_s
+    g = c * T * T + tau * T  # d E(next) / d sigma
+    s0 = -(E + T * v - tau * eps) / g  # sigma at which the projected next E is 0
     R0 = -(T * s0 + K)
-    Ac = a * c * T
+    Ac = a * c * T + a * tau  # a g / T (written so that tau = 0 repeats the plain barrier)
     R = abs(R0)
     z = R * R / (T * (R + Ac + np.sqrt(Ac * (2.0 * R + Ac))))
     s_b = s0 + z if R0 >= 0.0 else s0 - z
-    s_a = s0 + min(e, 0.0) / cT2
-    return H, max(s_a, s_b)
+    s_a = s0 + min(E, 0.0) / g
+    cT2 = c * T * T
+    s_e = -(e + T * v) / cT2 + min(e, 0.0) / cT2  # the distance: e(next) >= min(e, 0)
+    return H, max(s_a, s_b, s_e)
 
 
 @njit(cache=True, nogil=True)
-def _entry_radius(V, a, Ds, T, c):
+def _entry_radius(V, a, Ds, T, c, tau=0.0):
     """Smallest distance at which a UAV closing at V (m/s, line of sight) is still on the
-    safe side of the barrier with braking a (radius condition (b), docs/safety.md)."""
+    safe side of the barrier with braking a and reaction time tau (radius condition (b),
+    docs/safety.md)."""
     x = max(0.0, V - (c - 0.5) * a * T)
-    return Ds + V * T + x * x / (2.0 * a)
+    return Ds + V * (T + tau) + x * x / (2.0 * a)
 
 
 @njit(cache=True, nogil=True)
-def _constraints(b, i, mate, q, p, f, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, U, G, rhs, n):
+def _constraints(b, i, mate, q, p, f, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, tau, U, G, rhs, n):
     """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok).
     UAV ``mate`` (the partner; -1: none) is constrained at any distance, the others within
     the sensing radius, and beyond it up to the lookahead range (squared: RL2) those that
@@ -347,7 +353,7 @@ def _constraints(b, i, mate, q, p, f, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, 
             for k in range(D):
                 V -= (q[b, i, k] - q[b, j, k]) * (p[b, i, k] - p[b, j, k]) / d
             a = 2.0 * alpha if coop[j] else alpha - A_o
-            if d >= _entry_radius(V, a, Ds, T, c):
+            if d >= _entry_radius(V, a, Ds, T, c, tau):
                 continue  # the radius condition (b) still holds for it
         d = np.sqrt(d2)
         for k in range(D):
@@ -365,7 +371,7 @@ def _constraints(b, i, mate, q, p, f, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, 
             amax = 2.0 * (fn + U) if coop[j] else fn + U + A_o
             geo = min(2.0, 2.0 * T * (np.sqrt(w2) + c * T * amax) / (d + min(d, Ds)))
             eps = (1.0 - c) * T * amax * geo
-        H, smin = _sigma_min(d - Ds, v, eps, a, T, c, lam)
+        H, smin = _sigma_min(d - Ds, v, eps, a, T, c, lam, tau)
         hmin = min(hmin, H)
         need = 0.5 * smin if coop[j] else smin + A_o
         if need - nf <= -U:
@@ -382,7 +388,7 @@ def _filter_kernel(q, p, f, un, agents, mates, coop, pr, u, active, corr, infeas
     B, M, D = un.shape
     N = q.shape[1]
     Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
-    RL2 = pr[8]
+    RL2, tau = pr[8], pr[9]
     G = np.zeros((max(N, 1), 3))
     rhs = np.zeros(max(N, 1))
     W = np.zeros((4, 4, 4))
@@ -410,6 +416,7 @@ def _filter_kernel(q, p, f, un, agents, mates, coop, pr, u, active, corr, infeas
                 lam,
                 T,
                 c,
+                tau,
                 U,
                 G,
                 rhs,

@@ -19,6 +19,10 @@ sigma >= sigma_min, a closed-form root (:func:`_sigma_min`). That is one halfspa
 
     n . (f_i + u_i) >= sigma_min + A_o        (unpaired j:  n . a_j <= A_o assumed)
     n . (f_i + u_i) >= sigma_min / 2          (filtered j:  j enforces the other half)
+
+With a reaction time tau (``SafetyParams.reaction_time``) the barrier is taken at the gap
+left after coasting tau at the current range rate, E = e + tau v, in place of e (and the
+distance itself still obeys e+ >= min(e, 0)).
 """
 
 from __future__ import annotations
@@ -124,6 +128,7 @@ class SafetyFilter:
                 P.position_gain,
                 P.accel_limit,
                 P.lookahead_range**2,
+                P.reaction_time,
             ]
         )
 

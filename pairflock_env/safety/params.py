@@ -60,6 +60,11 @@ class SafetyParams:
     every UAV that closes on it so fast that the radius condition (b) of docs/safety.md
     fails at its distance: D_s + delta + V T + max(0, V - beta)^2 / (2 alpha_ij) > d (V: the
     closing speed along the line of sight). None: R_s (no lookahead); >= R_s."""
+    reaction_time: float = 0.0
+    """tau (s): the barrier counts on braking only after coasting tau at the current range
+    rate, E = d - D_s - delta + tau d' (a reaction-time braking distance, for a vehicle that
+    realises its command with a lag, e.g. the quadrotor's attitude loop); >= 0. The
+    distance itself is still constrained as with tau = 0."""
     decay: float = 0.5
     """lambda in (0, 1]: the discrete barrier condition is H(k+1) >= (1 - lambda) H(k);
     1 allows the state onto the braking curve in one step, smaller values approach it
@@ -113,6 +118,10 @@ class SafetyParams:
                 f"sensing_radius={r:g} (or None)"
             )
         put(self, "lookahead_range", reach)
+        tau = _real("reaction_time", self.reaction_time)
+        if tau < 0:
+            raise ValueError(f"reaction_time={self.reaction_time!r} is invalid: must be >= 0")
+        put(self, "reaction_time", tau)
         lam = _real("decay", self.decay)
         if not 0 < lam <= 1:
             raise ValueError(f"decay={self.decay!r} is invalid: must be in (0, 1]")
@@ -133,7 +142,8 @@ class SafetyParams:
         """Parameters for an env config: ``accel_limit = pair_accel_limit``, the config's
         ``dt``, ``substeps``, ``integrator`` and its ``safety_*`` fields (section ``safety``:
         ``safety_distance``, ``safety_margin``, ``safety_brake_accel``,
-        ``safety_other_accel``, ``safety_sensing_radius``, ``safety_decay``); keyword
+        ``safety_other_accel``, ``safety_sensing_radius``, ``safety_lookahead_range``,
+        ``safety_reaction_time``, ``safety_decay``); keyword
         ``overrides`` replace any field."""
         kw = dict(
             accel_limit=config.pair_accel_limit,
@@ -148,6 +158,7 @@ class SafetyParams:
             "other_accel",
             "sensing_radius",
             "lookahead_range",
+            "reaction_time",
             "decay",
         ):
             key = name if name == "safety_distance" else f"safety_{name}"
@@ -180,10 +191,11 @@ class SafetyParams:
 
     def required_sensing_radius(self, closing_speed: float, cooperative: bool = False) -> float:
         """Smallest R_s (m) such that a UAV closing at ``closing_speed`` (m/s) or less is
-        first sensed on the safe side of the barrier: D_s + delta + V T + max(0, V - beta)^2 /
-        (2 alpha_ij), beta = (c - 1/2) alpha_ij T (docs/safety.md). It concerns the UAVs
-        other than the agent's partner, which the filter senses at any distance; the filter
-        uses the same formula for ``lookahead_range``."""
+        first sensed on the safe side of the barrier: D_s + delta + V (T + tau) +
+        max(0, V - beta)^2 / (2 alpha_ij), beta = (c - 1/2) alpha_ij T (docs/safety.md).
+        It concerns the UAVs other than the agent's partner, which the filter senses at any
+        distance; the filter uses the same formula for ``lookahead_range``."""
         v = _real("closing_speed", closing_speed)
         a = self.barrier_accel(cooperative)
-        return float(_entry_radius(v, a, self.barrier_distance, self.dt, self.position_gain))
+        d = self.barrier_distance
+        return float(_entry_radius(v, a, d, self.dt, self.position_gain, self.reaction_time))

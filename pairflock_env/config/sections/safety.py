@@ -111,6 +111,15 @@ SAFETY = Section(
             "brake for from where it is (docs/safety.md); None: no lookahead.",
         ),
         Field(
+            "safety_reaction_time",
+            Real(0.0, 10.0),
+            0.0,
+            "s",
+            "Reaction time tau of the barrier: a paired UAV counts on braking only after "
+            "coasting tau at the current closing speed (for a vehicle that realises its "
+            "command with a lag, such as the quadrotor's attitude loop); 0: at once.",
+        ),
+        Field(
             "safety_decay",
             Real(0.0, 1.0, lo_open=True),
             0.5,
