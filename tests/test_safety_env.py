@@ -41,6 +41,7 @@ def test_config_section_defaults_keep_the_filter_off():
         on.replace(safety_distance=2.0, safety_brake_accel=300.0, safety_other_accel=30.0)
     )
     assert (p.safety_distance, p.brake_accel, p.other_accel) == (2.0, 300.0, 30.0)
+    assert SafetyParams.from_config(on.replace(safety_reaction_time=0.1)).reaction_time == 0.1
 
 
 @pytest.mark.parametrize(
@@ -57,6 +58,8 @@ def test_config_section_defaults_keep_the_filter_off():
         (dict(safety_sensing_radius=float("nan")), ValueError, "safety_sensing_radius=nan"),
         (dict(safety_margin=-0.1), ValueError, "safety_margin=-0.1 is invalid"),
         (dict(safety_margin=[0.1]), TypeError, "safety_margin=[0.1] is invalid"),
+        (dict(safety_reaction_time=-0.1), ValueError, "safety_reaction_time=-0.1 is invalid"),
+        (dict(safety_reaction_time="0"), TypeError, "safety_reaction_time='0' is invalid"),
     ],
 )
 def test_bad_safety_fields_name_field_and_range(overrides, exc, start):
@@ -157,9 +160,11 @@ def test_filtered_command_is_the_applied_one():
     assert changed
 
 
-def test_quadrotor_gets_the_filter_too():
-    cfg = make_config("paper-quadrotor", **CBF)
+@pytest.mark.parametrize("tau", [0.0, 0.1])
+def test_quadrotor_gets_the_filter_too(tau):
+    cfg = make_config("paper-quadrotor", **CBF, safety_reaction_time=tau)
     core = PairFlockCore(cfg, num_envs=1)
+    assert core.safety.filter.params.reaction_time == tau
     pol = make_pair_policy("smc", cfg)
     for res in _run(core, pol, 20, [0]):
         assert all(res.info[k].shape == (1, core.n_agents) for k in SAFETY_INFO_KEYS)
