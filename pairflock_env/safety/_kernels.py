@@ -298,7 +298,8 @@ def _sigma_min(e, v, eps, a, T, c, lam, tau=0.0):
     E = e + tau * v
     H = np.sign(E) * np.sqrt(2.0 * a * abs(E)) + v + beta
     K = v - eps + beta - (1.0 - lam) * H
-    g = c * T * T + tau * T  # d E(next) / d sigma
+    cT2 = c * T * T
+    g = cT2 + tau * T  # d E(next) / d sigma
     s0 = -(E + T * v - tau * eps) / g  # sigma at which the projected next E is 0
     R0 = -(T * s0 + K)
     Ac = a * c * T + a * tau  # a g / T (written so that tau = 0 repeats the plain barrier)
@@ -306,7 +307,6 @@ def _sigma_min(e, v, eps, a, T, c, lam, tau=0.0):
     z = R * R / (T * (R + Ac + np.sqrt(Ac * (2.0 * R + Ac))))
     s_b = s0 + z if R0 >= 0.0 else s0 - z
     s_a = s0 + min(E, 0.0) / g
-    cT2 = c * T * T
     s_e = -(e + T * v) / cT2 + min(e, 0.0) / cT2  # the distance: e(next) >= min(e, 0)
     return H, max(s_a, s_b, s_e)
 
