@@ -8,6 +8,14 @@ from view_helpers import VIEWS, make_view, reset_view, step_view, zero_action
 
 from baselines.controllers import make_pair_policy
 from pairflock_env import AGENT_INFO_KEYS, PairFlockCore, make_config
+from pairflock_env.config.sections.safety import (
+    BRAKE_SHARE,
+    DECAY,
+    OTHER_SHARE,
+    QUAD_DECAY,
+    QUAD_OTHER_SHARE,
+    QUAD_REACTION_CYCLES,
+)
 from pairflock_env.safety import SafetyParams
 from pairflock_env.safety.stage import SAFETY_INFO_KEYS
 
@@ -44,6 +52,40 @@ def test_config_section_defaults_keep_the_filter_off():
     assert SafetyParams.from_config(on.replace(safety_reaction_time=0.1)).reaction_time == 0.1
 
 
+def test_unset_filter_parameters_follow_the_vehicle():
+    """On the quadrotor the unset parameters come from the vehicle: alpha and A_o within
+    quad_accel_limit, tau from the attitude loop's frequency, the quadrotor rate; set values
+    and the particle model are left alone."""
+    q = make_config("paper-quadrotor", **CBF)
+    p = SafetyParams.from_config(q)
+    L, U = q.quad_accel_limit, q.pair_accel_limit
+    assert U * BRAKE_SHARE > L  # so the vehicle's bound is the one that binds here
+    assert p.brake_accel == L and p.other_accel == pytest.approx(QUAD_OTHER_SHARE * L)
+    assert p.reaction_time == pytest.approx(QUAD_REACTION_CYCLES / q.quad_attitude_freq)
+    assert p.decay == QUAD_DECAY
+    # what docs/safety.md measured on the quadrotor, to the last bit
+    assert (p.brake_accel, p.other_accel, p.reaction_time, p.decay) == (6.0, 2.0, 0.1, 0.1)
+    # the attitude loop sets tau: a slower loop (with the physics step it needs) waits longer
+    slow = SafetyParams.from_config(q.replace(quad_attitude_freq=7.5))
+    assert slow.reaction_time == pytest.approx(2 * p.reaction_time)
+    # a small pair budget binds before the vehicle does
+    small = SafetyParams.from_config(q.replace(pair_accel_limit=2.0))
+    assert (small.brake_accel, small.other_accel) == (BRAKE_SHARE * 2.0, OTHER_SHARE * 2.0)
+    # the same scenario on the particle model keeps the generic defaults
+    part = SafetyParams.from_config(q.replace(dynamics="particle"))
+    assert (part.brake_accel, part.other_accel) == (BRAKE_SHARE * U, OTHER_SHARE * U)
+    assert (part.reaction_time, part.decay) == (0.0, DECAY)
+    # values that are set win on either vehicle
+    mine = dict(
+        safety_brake_accel=5.0, safety_other_accel=1.0, safety_reaction_time=0.0, safety_decay=0.5
+    )
+    for dyn in ("quadrotor", "particle"):
+        s = SafetyParams.from_config(q.replace(dynamics=dyn, **mine))
+        assert (s.brake_accel, s.other_accel, s.reaction_time, s.decay) == (5.0, 1.0, 0.0, 0.5)
+    # the config stores None for an unset value (the vehicle resolves it)
+    assert q.safety_reaction_time is None and q.safety_decay is None
+
+
 @pytest.mark.parametrize(
     "overrides, exc, start",
     [
@@ -60,6 +102,7 @@ def test_config_section_defaults_keep_the_filter_off():
         (dict(safety_margin=[0.1]), TypeError, "safety_margin=[0.1] is invalid"),
         (dict(safety_reaction_time=-0.1), ValueError, "safety_reaction_time=-0.1 is invalid"),
         (dict(safety_reaction_time="0"), TypeError, "safety_reaction_time='0' is invalid"),
+        (dict(safety_decay="0.1"), TypeError, "safety_decay='0.1' is invalid"),
     ],
 )
 def test_bad_safety_fields_name_field_and_range(overrides, exc, start):
@@ -160,11 +203,11 @@ def test_filtered_command_is_the_applied_one():
     assert changed
 
 
-@pytest.mark.parametrize("tau", [0.0, 0.1])
+@pytest.mark.parametrize("tau", [0.0, 0.1, None])
 def test_quadrotor_gets_the_filter_too(tau):
     cfg = make_config("paper-quadrotor", **CBF, safety_reaction_time=tau)
     core = PairFlockCore(cfg, num_envs=1)
-    assert core.safety.filter.params.reaction_time == tau
+    assert core.safety.filter.params.reaction_time == (0.1 if tau is None else tau)
     pol = make_pair_policy("smc", cfg)
     for res in _run(core, pol, 20, [0]):
         assert all(res.info[k].shape == (1, core.n_agents) for k in SAFETY_INFO_KEYS)

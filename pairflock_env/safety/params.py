@@ -7,7 +7,8 @@ import math
 import numbers
 from typing import Any
 
-from ..config.sections.safety import BRAKE_SHARE, OTHER_SHARE
+from ..config.sections import safety as _section
+from ..config.sections.safety import BRAKE_SHARE, DECAY, OTHER_SHARE
 from ._kernels import _entry_radius
 
 __all__ = ["INTEGRATORS", "SafetyParams"]
@@ -65,7 +66,7 @@ class SafetyParams:
     rate, E = d - D_s - delta + tau d' (a reaction-time braking distance, for a vehicle that
     realises its command with a lag, e.g. the quadrotor's attitude loop); >= 0. The
     distance itself is still constrained as with tau = 0."""
-    decay: float = 0.5
+    decay: float = DECAY
     """lambda in (0, 1]: the discrete barrier condition is H(k+1) >= (1 - lambda) H(k);
     1 allows the state onto the braking curve in one step, smaller values approach it
     geometrically."""
@@ -143,27 +144,26 @@ class SafetyParams:
         ``dt``, ``substeps``, ``integrator`` and its ``safety_*`` fields (section ``safety``:
         ``safety_distance``, ``safety_margin``, ``safety_brake_accel``,
         ``safety_other_accel``, ``safety_sensing_radius``, ``safety_lookahead_range``,
-        ``safety_reaction_time``, ``safety_decay``); keyword
-        ``overrides`` replace any field."""
-        kw = dict(
+        ``safety_reaction_time``, ``safety_decay``). The unset (None) ones follow the
+        vehicle: the brake and other accelerations, the reaction time and the rate take the
+        section's defaults for ``config.dynamics`` (:func:`~pairflock_env.config.sections.
+        safety.brake_accel` and its siblings; on the quadrotor they depend on
+        ``quad_accel_limit`` and ``quad_attitude_freq``). Keyword ``overrides`` replace any
+        field."""
+        kw: dict[str, Any] = dict(
             accel_limit=config.pair_accel_limit,
             dt=config.dt,
             substeps=config.substeps,
             integrator=config.integrator,
+            safety_distance=config.safety_distance,
+            margin=config.safety_margin,
+            brake_accel=_section.brake_accel(config),
+            other_accel=_section.other_accel(config),
+            sensing_radius=config.safety_sensing_radius,
+            lookahead_range=config.safety_lookahead_range,
+            reaction_time=_section.reaction_time(config),
+            decay=_section.decay(config),
         )
-        for name in (
-            "safety_distance",
-            "margin",
-            "brake_accel",
-            "other_accel",
-            "sensing_radius",
-            "lookahead_range",
-            "reaction_time",
-            "decay",
-        ):
-            key = name if name == "safety_distance" else f"safety_{name}"
-            if hasattr(config, key):
-                kw[name] = getattr(config, key)
         names = {f.name for f in dataclasses.fields(cls)}
         unknown = sorted(set(overrides) - names)
         if unknown:

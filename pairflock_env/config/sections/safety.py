@@ -11,27 +11,77 @@ from ..fields import Choice, Field, OrNone, Real
 from ..limits import MAX_DISTANCE, MAX_GAIN
 from ..schema import Rule, Section
 
-__all__ = ["BRAKE_SHARE", "OTHER_SHARE", "RULES", "SECTIONS", "brake_accel", "other_accel"]
+__all__ = [
+    "BRAKE_SHARE",
+    "DECAY",
+    "OTHER_SHARE",
+    "QUAD_DECAY",
+    "QUAD_OTHER_SHARE",
+    "QUAD_REACTION_CYCLES",
+    "RULES",
+    "SECTIONS",
+    "brake_accel",
+    "decay",
+    "other_accel",
+    "reaction_time",
+]
 
 #: share of ``pair_accel_limit`` a paired UAV counts on for braking when unset
 BRAKE_SHARE = 0.8
 #: share of ``pair_accel_limit`` assumed for unpaired UAVs' acceleration when unset; the
 #: barrier against an unpaired UAV brakes at (BRAKE_SHARE - OTHER_SHARE) pair_accel_limit
 OTHER_SHARE = 0.4
+#: barrier rate lambda when unset (particle model)
+DECAY = 0.5
+
+# Quadrotor defaults (``dynamics="quadrotor"``, docs/safety.md "Quadrotors"): the vehicle
+# realises at most ``quad_accel_limit`` in total and realises it late (its attitude loop), so
+# the unset parameters follow the vehicle. They reproduce the setting selected on the tuning
+# seeds 60000-60099 of the paper-quadrotor scenario (alpha 6, A_o 2, tau 0.1 s, lambda 0.1).
+#: A_o is at most this share of ``quad_accel_limit`` (alpha at most all of it)
+QUAD_OTHER_SHARE = 1.0 / 3.0
+#: tau = QUAD_REACTION_CYCLES / quad_attitude_freq (the attitude loop's time scale 1/wn;
+#: 0.1 s at the default 15 rad/s, the only frequency it was measured at)
+QUAD_REACTION_CYCLES = 1.5
+#: barrier rate lambda when unset on the quadrotor
+QUAD_DECAY = 0.1
+
+
+def _quadrotor(v: Any) -> bool:
+    return getattr(v, "dynamics", "particle") == "quadrotor"
 
 
 def brake_accel(v: Any) -> float:
-    """alpha (m/s^2): ``safety_brake_accel``, or ``BRAKE_SHARE x pair_accel_limit``."""
-    if v.safety_brake_accel is None:
-        return BRAKE_SHARE * v.pair_accel_limit
-    return v.safety_brake_accel
+    """alpha (m/s^2): ``safety_brake_accel``, or ``BRAKE_SHARE x pair_accel_limit`` (on the
+    quadrotor at most ``quad_accel_limit``)."""
+    if v.safety_brake_accel is not None:
+        return v.safety_brake_accel
+    a = BRAKE_SHARE * v.pair_accel_limit
+    return min(a, v.quad_accel_limit) if _quadrotor(v) else a
 
 
 def other_accel(v: Any) -> float:
-    """A_o (m/s^2): ``safety_other_accel``, or ``OTHER_SHARE x pair_accel_limit``."""
-    if v.safety_other_accel is None:
-        return OTHER_SHARE * v.pair_accel_limit
-    return v.safety_other_accel
+    """A_o (m/s^2): ``safety_other_accel``, or ``OTHER_SHARE x pair_accel_limit`` (on the
+    quadrotor at most ``QUAD_OTHER_SHARE x quad_accel_limit``)."""
+    if v.safety_other_accel is not None:
+        return v.safety_other_accel
+    o = OTHER_SHARE * v.pair_accel_limit
+    return min(o, QUAD_OTHER_SHARE * v.quad_accel_limit) if _quadrotor(v) else o
+
+
+def reaction_time(v: Any) -> float:
+    """tau (s): ``safety_reaction_time``, or 0 (on the quadrotor QUAD_REACTION_CYCLES /
+    ``quad_attitude_freq``)."""
+    if v.safety_reaction_time is not None:
+        return v.safety_reaction_time
+    return QUAD_REACTION_CYCLES / v.quad_attitude_freq if _quadrotor(v) else 0.0
+
+
+def decay(v: Any) -> float:
+    """lambda: ``safety_decay``, or DECAY (on the quadrotor QUAD_DECAY)."""
+    if v.safety_decay is not None:
+        return v.safety_decay
+    return QUAD_DECAY if _quadrotor(v) else DECAY
 
 
 @dataclasses.dataclass(frozen=True)
@@ -79,7 +129,10 @@ SAFETY = Section(
         ),
         Field(
             "safety_brake_accel",
-            OrNone(Real(0.0, MAX_GAIN, lo_open=True), "0.8 pair_accel_limit"),
+            OrNone(
+                Real(0.0, MAX_GAIN, lo_open=True),
+                "0.8 pair_accel_limit; quadrotor: at most quad_accel_limit",
+            ),
             None,
             "m/s^2",
             "Line-of-sight deceleration alpha a paired UAV counts on from its own acceleration "
@@ -87,7 +140,9 @@ SAFETY = Section(
         ),
         Field(
             "safety_other_accel",
-            OrNone(Real(0.0, MAX_GAIN), "0.4 pair_accel_limit"),
+            OrNone(
+                Real(0.0, MAX_GAIN), "0.4 pair_accel_limit; quadrotor: at most quad_accel_limit / 3"
+            ),
             None,
             "m/s^2",
             "Assumed bound A_o on an unpaired UAV's acceleration towards a paired UAV; below "
@@ -112,8 +167,8 @@ SAFETY = Section(
         ),
         Field(
             "safety_reaction_time",
-            Real(0.0, 10.0),
-            0.0,
+            OrNone(Real(0.0, 10.0), "0; quadrotor: 1.5 / quad_attitude_freq"),
+            None,
             "s",
             "Reaction time tau of the barrier: a paired UAV counts on braking only after "
             "coasting tau at the current closing speed (for a vehicle that realises its "
@@ -121,8 +176,8 @@ SAFETY = Section(
         ),
         Field(
             "safety_decay",
-            Real(0.0, 1.0, lo_open=True),
-            0.5,
+            OrNone(Real(0.0, 1.0, lo_open=True), "0.5; quadrotor: 0.1"),
+            None,
             "1",
             "Discrete barrier rate lambda: H(k+1) >= (1 - lambda) H(k); 1 lets the state "
             "reach the braking curve in one step.",
@@ -144,7 +199,8 @@ def _other_below_brake(v: Any) -> str | None:
     if not o < a:
         return (
             f"must keep the other UAVs' bound safety_other_accel ({o:g} m/s^2) below the brake "
-            f"acceleration safety_brake_accel ({a:g} m/s^2; None: 0.8 pair_accel_limit)"
+            f"acceleration safety_brake_accel ({a:g} m/s^2; None: 0.8 pair_accel_limit, on the "
+            "quadrotor at most quad_accel_limit)"
         )
     return None
 
@@ -172,7 +228,13 @@ RULES = (
         "safety_brake_accel <= pair_accel_limit",
     ),
     Rule(
-        ("safety_other_accel", "safety_brake_accel", "pair_accel_limit"),
+        (
+            "safety_other_accel",
+            "safety_brake_accel",
+            "pair_accel_limit",
+            "dynamics",
+            "quad_accel_limit",
+        ),
         _other_below_brake,
         "safety_other_accel < the brake acceleration (each default or set)",
     ),
