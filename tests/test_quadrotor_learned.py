@@ -49,6 +49,10 @@ def test_the_criteria_apply_to_any_named_controller_and_keep_smc_lines():
     ]
     failed = [c for c, ok, _ in learned if not ok]
     assert len(failed) == 1 and "turns" in failed[0]  # the one seed out of the turn bound
+    # each detail counts the runs that miss: one of the learned policy's four in the turns
+    detail = {c.removeprefix(f"{LEARNED}: "): d for c, _, d in learned}
+    assert [d.rsplit("; ", 1)[1] for d in detail.values()].count("0/4 runs miss") == 6  # of 7
+    assert next(d for c, d in detail.items() if "turns" in c).endswith("; 1/4 runs miss")
     assert check_quadrotor(rows, policies=("proportional",)) == []  # no rows: no checks
     strict = dataclasses.replace(QUADROTOR, min_distance=3 * QUADROTOR.min_distance)
     assert not all(ok for _, ok, _ in check_quadrotor(rows, strict, policies=(LEARNED,)))
