@@ -68,6 +68,11 @@ def test_unset_filter_parameters_follow_the_vehicle():
     # the attitude loop sets tau: a slower loop (with the physics step it needs) waits longer
     slow = SafetyParams.from_config(q.replace(quad_attitude_freq=7.5))
     assert slow.reaction_time == pytest.approx(2 * p.reaction_time)
+    # a narrow tilt cone binds before quad_accel_limit: g tan(20 deg) = 3.57 m/s^2
+    narrow = SafetyParams.from_config(q.replace(quad_tilt_limit=20.0))
+    bound = q.quad_gravity * np.tan(np.radians(20.0))
+    assert bound < L and narrow.brake_accel == pytest.approx(bound)
+    assert narrow.other_accel == pytest.approx(QUAD_OTHER_SHARE * bound)
     # a small pair budget binds before the vehicle does
     small = SafetyParams.from_config(q.replace(pair_accel_limit=2.0))
     assert (small.brake_accel, small.other_accel) == (BRAKE_SHARE * 2.0, OTHER_SHARE * 2.0)

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -23,6 +24,7 @@ __all__ = [
     "brake_accel",
     "decay",
     "other_accel",
+    "quad_accel_bound",
     "reaction_time",
 ]
 
@@ -35,10 +37,10 @@ OTHER_SHARE = 0.4
 DECAY = 0.5
 
 # Quadrotor defaults (``dynamics="quadrotor"``, docs/safety.md "Quadrotors"): the vehicle
-# realises at most ``quad_accel_limit`` in total and realises it late (its attitude loop), so
-# the unset parameters follow the vehicle. They reproduce the setting selected on the tuning
+# realises at most ``quad_accel_bound`` and realises it late (its attitude loop), so the unset
+# parameters follow the vehicle. They reproduce the setting selected on the tuning
 # seeds 60000-60099 of the paper-quadrotor scenario (alpha 6, A_o 2, tau 0.1 s, lambda 0.1).
-#: A_o is at most this share of ``quad_accel_limit`` (alpha at most all of it)
+#: A_o is at most this share of :func:`quad_accel_bound` (alpha at most all of it)
 QUAD_OTHER_SHARE = 1.0 / 3.0
 #: tau = QUAD_REACTION_CYCLES / quad_attitude_freq (the attitude loop's time scale 1/wn;
 #: 0.1 s at the default 15 rad/s, the only frequency it was measured at)
@@ -51,22 +53,30 @@ def _quadrotor(v: Any) -> bool:
     return getattr(v, "dynamics", "particle") == "quadrotor"
 
 
+def quad_accel_bound(v: Any) -> float:
+    """The horizontal acceleration (m/s^2) a hovering quadrotor can realise:
+    min(``quad_accel_limit``, ``quad_gravity`` tan ``quad_tilt_limit``), the smaller of its
+    command bound and its tilt cone (6 m/s^2 in the paper-quadrotor preset)."""
+    tilt = math.radians(v.quad_tilt_limit)
+    return min(v.quad_accel_limit, v.quad_gravity * math.tan(tilt))
+
+
 def brake_accel(v: Any) -> float:
     """alpha (m/s^2): ``safety_brake_accel``, or ``BRAKE_SHARE x pair_accel_limit`` (on the
-    quadrotor at most ``quad_accel_limit``)."""
+    quadrotor at most :func:`quad_accel_bound`)."""
     if v.safety_brake_accel is not None:
         return v.safety_brake_accel
     a = BRAKE_SHARE * v.pair_accel_limit
-    return min(a, v.quad_accel_limit) if _quadrotor(v) else a
+    return min(a, quad_accel_bound(v)) if _quadrotor(v) else a
 
 
 def other_accel(v: Any) -> float:
     """A_o (m/s^2): ``safety_other_accel``, or ``OTHER_SHARE x pair_accel_limit`` (on the
-    quadrotor at most ``QUAD_OTHER_SHARE x quad_accel_limit``)."""
+    quadrotor at most ``QUAD_OTHER_SHARE x`` :func:`quad_accel_bound`)."""
     if v.safety_other_accel is not None:
         return v.safety_other_accel
     o = OTHER_SHARE * v.pair_accel_limit
-    return min(o, QUAD_OTHER_SHARE * v.quad_accel_limit) if _quadrotor(v) else o
+    return min(o, QUAD_OTHER_SHARE * quad_accel_bound(v)) if _quadrotor(v) else o
 
 
 def reaction_time(v: Any) -> float:
@@ -131,18 +141,17 @@ SAFETY = Section(
             "safety_brake_accel",
             OrNone(
                 Real(0.0, MAX_GAIN, lo_open=True),
-                "0.8 pair_accel_limit; quadrotor: at most quad_accel_limit",
+                "0.8 pair_accel_limit; quadrotor: at most the vehicle's bound",
             ),
             None,
             "m/s^2",
             "Line-of-sight deceleration alpha a paired UAV counts on from its own acceleration "
-            "when it must brake; at most pair_accel_limit.",
+            "when it must brake; at most pair_accel_limit. The quadrotor's bound is "
+            "min(quad_accel_limit, quad_gravity tan quad_tilt_limit).",
         ),
         Field(
             "safety_other_accel",
-            OrNone(
-                Real(0.0, MAX_GAIN), "0.4 pair_accel_limit; quadrotor: at most quad_accel_limit / 3"
-            ),
+            OrNone(Real(0.0, MAX_GAIN), "0.4 pair_accel_limit; quadrotor: at most its bound / 3"),
             None,
             "m/s^2",
             "Assumed bound A_o on an unpaired UAV's acceleration towards a paired UAV; below "
@@ -200,7 +209,7 @@ def _other_below_brake(v: Any) -> str | None:
         return (
             f"must keep the other UAVs' bound safety_other_accel ({o:g} m/s^2) below the brake "
             f"acceleration safety_brake_accel ({a:g} m/s^2; None: 0.8 pair_accel_limit, on the "
-            "quadrotor at most quad_accel_limit)"
+            "quadrotor at most min(quad_accel_limit, quad_gravity tan quad_tilt_limit))"
         )
     return None
 
@@ -234,6 +243,8 @@ RULES = (
             "pair_accel_limit",
             "dynamics",
             "quad_accel_limit",
+            "quad_gravity",
+            "quad_tilt_limit",
         ),
         _other_below_brake,
         "safety_other_accel < the brake acceleration (each default or set)",
