@@ -441,6 +441,26 @@ def test_experiment_cli_writes_table_csv_and_figures(tmp_path):
         main(["--set", "quad_mass=-1", "--out", str(out / "bad"), "--quiet"])
 
 
+def test_experiment_gains_reach_sliding_mode_and_bad_ones_name_their_flag(tmp_path):
+    import csv
+
+    from baselines.quadrotor_experiment import main
+
+    common = ["--policies", "smc", "--dynamics", "quadrotor", "--seeds", "1", "--horizon", "2"]
+    common += ["--workers", "1", "--no-figures", "--quiet"]
+    chatter = {}
+    for name, extra in (("sign", []), ("layer", ["--smc-boundary-layer", "50"])):
+        assert main([*common, *extra, "--out", str(tmp_path / name)]) == 0
+        (row,) = csv.DictReader((tmp_path / name / "results.csv").open())
+        chatter[name] = float(row["chattering"])
+    assert chatter["layer"] < chatter["sign"]  # a wide layer smooths the switching term
+    for flag, value in (("--smc-boundary-layer", "0"), ("--smc-k", "-1"), ("--kp", "nan")):
+        pol = ["--policies", "proportional"] if flag == "--kp" else []
+        with pytest.raises(SystemExit, match=f"^{flag}: .* is invalid"):
+            main([*common, *pol, flag, value, "--out", str(tmp_path / "bad")])
+    assert not (tmp_path / "bad").exists()
+
+
 # --------------------------------------------------------------------------- kernel stages
 def test_kernel_stages_match_their_documented_formulas():
     """The scalar stages the kernel is built from, one by one, against numpy."""

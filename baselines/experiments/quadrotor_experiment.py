@@ -134,6 +134,14 @@ def _run_options(p: argparse.ArgumentParser) -> None:
         default=None,
         help="surface slope c of sliding mode (default: the preset's, 1 1/s)",
     )
+    p.add_argument(
+        "--smc-boundary-layer",
+        type=float,
+        default=None,
+        metavar="PHI",
+        help="boundary layer phi (m^2/s) of sliding mode: sat(s/phi) in place of the paper's "
+        "sign(s) (default: sign)",
+    )
     p.add_argument("--kp", type=float, default=None, help="gain k_p of proportional (default 1)")
     p.add_argument("--horizon", type=float, default=None, help="episode length in s (preset: 65)")
     p.add_argument(
@@ -206,7 +214,11 @@ def _settings(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, dict[
         except (TypeError, ValueError) as exc:
             raise SystemExit(f"invalid configuration: {exc}") from None
     gains: dict[str, dict[str, float]] = {"smc": {}, "proportional": {}}
-    for policy, gain, value in (("smc", "k", args.smc_k), ("smc", "c", args.smc_c)):
+    for policy, gain, value in (
+        ("smc", "k", args.smc_k),
+        ("smc", "c", args.smc_c),
+        ("smc", "boundary_layer", args.smc_boundary_layer),
+    ):
         if value is not None:
             gains[policy][gain] = value
     if args.kp is not None:
@@ -233,6 +245,17 @@ def _check_policies(args: argparse.Namespace, overrides, gains) -> None:
                 make_pair_policy(pol, make_config(PRESET, dynamics=dyn, **overrides))
             except (TypeError, ValueError, FileNotFoundError) as exc:
                 raise SystemExit(f"--policies {pol!r} is invalid for {dyn}: {exc}") from None
+    flags = {"k": "--smc-k", "c": "--smc-c", "boundary_layer": "--smc-boundary-layer"}
+    for pol, given in gains.items():  # a bad gain exits here, naming its flag
+        if not given or pol not in args.policies:
+            continue
+        try:
+            make_pair_policy(
+                pol, make_config(PRESET, dynamics=args.dynamics[0], **overrides), **given
+            )
+        except (TypeError, ValueError) as exc:
+            names = ", ".join(flags.get(g, "--kp") for g in given)
+            raise SystemExit(f"{names}: {exc}") from None
 
 
 def criteria_policies(args: argparse.Namespace) -> list[str]:
