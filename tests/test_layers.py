@@ -39,6 +39,7 @@ TOP_LEVEL = {
     "reproduce": "experiments",
     "quadrotor_experiment": "experiments",
     "quadrotor_invariants": "experiments",
+    "quadrotor_compare": "experiments",
 }
 
 

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["QUADROTOR", "QuadrotorCriteria", "check_quadrotor"]
+__all__ = ["CRITERIA_KEYS", "QUADROTOR", "QuadrotorCriteria", "check_quadrotor", "run_outcomes"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -46,73 +46,119 @@ def _misses(ok: np.ndarray) -> str:
 
 def _runs(rows: Sequence[Mapping[str, Any]], dynamics: str, policy: str) -> list:
     sel = (r for r in rows if r["dynamics"] == dynamics and r["policy"] == policy)
-    return sorted(sel, key=lambda r: r["seed"])
+    return sorted(sel, key=lambda r: int(float(r["seed"])))  # seeds may be CSV text
+
+
+#: the criteria per run, in the order of :func:`check_quadrotor`'s lines: key -> (metric of
+#: ``results.csv``, and whether the criterion is an upper bound on it)
+CRITERIA_KEYS = {
+    "band_entry": ("band_entry_time", True),
+    "straight_max": ("straight_max_error", True),
+    "turn_peak": ("turn_peak_error", True),
+    "separation": ("min_distance", False),
+    "unpaired_velocity": ("velocity_mismatch", True),
+    "no_crash": ("crashed", True),
+    "attitude_cost": ("straight_max_error", True),  # minus the particle's, same seed
+}
+
+
+def run_outcomes(
+    rows: Sequence[Mapping[str, Any]], name: str, criteria: QuadrotorCriteria = QUADROTOR
+) -> dict[str, np.ndarray]:
+    """Which of controller ``name``'s quadrotor runs meet each criterion: ``"seed"`` (int)
+    and one boolean array per key of :data:`CRITERIA_KEYS`, in seed order. The attitude
+    cost needs the particle run of every seed and is left out without them; no quadrotor
+    rows give an empty dict. One implementation for :func:`check_quadrotor` (every run must
+    pass) and for per-run comparisons (:mod:`baselines.reporting.quadrotor_paired`)."""
+    c = criteria
+    quad = _runs(rows, "quadrotor", name)
+    if not quad:
+        return {}
+
+    def arr(key: str) -> np.ndarray:
+        return np.array([float(r[key]) for r in quad])
+
+    full = arr("steps_run") == float(quad[0]["steps_run"])
+    out = {
+        "seed": np.array([int(float(r["seed"])) for r in quad]),
+        "band_entry": arr("band_entry_time") <= c.band_entry_by,
+        "straight_max": arr("straight_max_error") <= c.straight_max,
+        "turn_peak": arr("turn_peak_error") <= c.turn_peak_max,
+        "separation": arr("min_distance") >= c.min_distance,
+        "unpaired_velocity": arr("velocity_mismatch") <= c.velocity_tolerance,
+        "no_crash": (arr("crashed") == 0) & full,
+    }
+    cost = _attitude_cost_values(rows, name, quad)
+    if cost is not None:
+        out["attitude_cost"] = cost <= c.attitude_cost
+    return out
 
 
 def _policy_checks(rows, name: str, c: QuadrotorCriteria) -> list[tuple[str, bool, str]]:
     """The criteria for controller ``name`` (its quadrotor rows, and its particle rows for the
     cost of the attitude loop)."""
-    quad = _runs(rows, "quadrotor", name)
-    if not quad:
+    ok = run_outcomes(rows, name, c)
+    if not ok:
         return []
+    quad = _runs(rows, "quadrotor", name)
 
     def arr(key: str) -> np.ndarray:
         return np.array([float(r[key]) for r in quad])
 
     entry, s, tp = arr("band_entry_time"), arr("straight_max_error"), arr("turn_peak_error")
     md, vm, crashed = arr("min_distance"), arr("velocity_mismatch"), arr("crashed")
-    full_runs = arr("steps_run") == float(quad[0]["steps_run"])
-    full_length = bool(np.all(full_runs))
+
+    def line(text: str, key: str, detail: str) -> tuple[str, bool, str]:
+        return f"{name}: {text}", bool(np.all(ok[key])), f"{detail}; {_misses(ok[key])}"
+
     out = [
-        (
-            f"{name}: first in the {c.band} m band within {c.band_entry_by:g} s",
-            bool(np.all(entry <= c.band_entry_by)),
-            f"{_range_s(entry)}; {_misses(entry <= c.band_entry_by)}",
+        line(
+            f"first in the {c.band} m band within {c.band_entry_by:g} s",
+            "band_entry",
+            _range_s(entry),
         ),
-        (
-            f"{name}: max abs pair error <= {c.straight_max} m in [15,20], [27,50], [57,65] s",
-            bool(np.all(s <= c.straight_max)),
-            f"max {np.max(s):.3f} m; {_misses(s <= c.straight_max)}",
+        line(
+            f"max abs pair error <= {c.straight_max} m in [15,20], [27,50], [57,65] s",
+            "straight_max",
+            f"max {np.max(s):.3f} m",
         ),
-        (
-            f"{name}: peak abs pair error in the turns <= {c.turn_peak_max} m",
-            bool(np.all(tp <= c.turn_peak_max)),
-            f"max {np.max(tp):.3f} m; {_misses(tp <= c.turn_peak_max)}",
+        line(
+            f"peak abs pair error in the turns <= {c.turn_peak_max} m",
+            "turn_peak",
+            f"max {np.max(tp):.3f} m",
         ),
-        (
-            f"{name}: no two UAVs closer than {c.min_distance} m",
-            bool(np.all(md >= c.min_distance)),
-            f"min {np.min(md):.2f} m; {_misses(md >= c.min_distance)}",
+        line(
+            f"no two UAVs closer than {c.min_distance} m", "separation", f"min {np.min(md):.2f} m"
         ),
-        (
-            f"{name}: unpaired velocity within {c.velocity_tolerance} m/s of the leader "
+        line(
+            f"unpaired velocity within {c.velocity_tolerance} m/s of the leader "
             "in [35,50], [60,65] s",
-            bool(np.all(vm <= c.velocity_tolerance)),
-            f"max {np.max(vm):.3f} m/s; {_misses(vm <= c.velocity_tolerance)}",
+            "unpaired_velocity",
+            f"max {np.max(vm):.3f} m/s",
         ),
-        (
-            f"{name}: no crash, every episode runs 65 s",
-            bool(np.all(crashed == 0) and full_length),
-            f"{int(crashed.sum())} crashes; {_misses((crashed == 0) & full_runs)}",
-        ),
+        line("no crash, every episode runs 65 s", "no_crash", f"{int(crashed.sum())} crashes"),
     ]
-    return out + _attitude_cost(rows, name, quad, s, c)
+    if "attitude_cost" in ok:
+        cost = _attitude_cost_values(rows, name, quad)
+        out.append(
+            line(
+                f"attitude loop costs <= {c.attitude_cost} m over the particle "
+                "(straight-flight max error, same seed)",
+                "attitude_cost",
+                f"{np.min(cost):+.3f} to {np.max(cost):+.3f} m",
+            )
+        )
+    return out
 
 
-def _attitude_cost(rows, name: str, quad: list, s: np.ndarray, c: QuadrotorCriteria) -> list:
-    """Quadrotor minus particle straight-flight max error, same seeds (none without them)."""
+def _attitude_cost_values(rows, name: str, quad: list) -> np.ndarray | None:
+    """Quadrotor minus particle straight-flight max error per seed (None without the
+    particle run of every seed)."""
     part = {r["seed"]: r for r in _runs(rows, "particle", name)}
     if not part or not all(r["seed"] in part for r in quad):
-        return []
-    cost = s - np.array([float(part[r["seed"]]["straight_max_error"]) for r in quad])
-    return [
-        (
-            f"{name}: attitude loop costs <= {c.attitude_cost} m over the particle "
-            "(straight-flight max error, same seed)",
-            bool(np.all(cost <= c.attitude_cost)),
-            f"{np.min(cost):+.3f} to {np.max(cost):+.3f} m; {_misses(cost <= c.attitude_cost)}",
-        )
-    ]
+        return None
+    s = np.array([float(r["straight_max_error"]) for r in quad])
+    return s - np.array([float(part[r["seed"]]["straight_max_error"]) for r in quad])
 
 
 def check_quadrotor(

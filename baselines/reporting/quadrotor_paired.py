@@ -1,0 +1,115 @@
+"""Two quadrotor-experiment runs compared seed by seed: per-run criterion misses, discordant
+pairs with an exact McNemar test, and the paired change of each criterion's metric.
+
+The Sec. VI-B criteria must hold on every seed of a set, so one run in 50 decides a set; this
+module counts runs instead, on the seeds both runs share (``python -m
+baselines.quadrotor_compare``, docs/safety.md "Per run rather than per set").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from scipy.stats import binomtest
+
+from .quadrotor_criteria import CRITERIA_KEYS, QUADROTOR, QuadrotorCriteria, run_outcomes
+
+__all__ = ["compare_runs", "paired_lines"]
+
+
+def _metric(rows, name: str, key: str, seeds: np.ndarray) -> np.ndarray:
+    by_seed = {
+        int(float(r["seed"])): float(r[key])
+        for r in rows
+        if r["dynamics"] == "quadrotor" and r["policy"] == name
+    }
+    return np.array([by_seed[int(s)] for s in seeds])
+
+
+def compare_runs(
+    rows_a: Sequence[Mapping[str, Any]],
+    rows_b: Sequence[Mapping[str, Any]],
+    policy_a: str = "smc",
+    policy_b: str | None = None,
+    *,
+    criteria: QuadrotorCriteria = QUADROTOR,
+    rng: np.random.Generator,
+    n_boot: int = 4000,
+) -> dict[str, Any]:
+    """Run A (``policy_a`` in ``rows_a``) against run B (``policy_b``, default the same name,
+    in ``rows_b``) on the quadrotor seeds both have.
+
+    Returns ``seeds`` (the shared seeds), ``misses`` {criterion: (A, B)} runs that miss,
+    ``all_pass`` (A, B) runs that meet every criterion both runs have, ``discordant``
+    {criterion: (A only, B only, exact two-sided McNemar p)} and ``change`` {metric: (median
+    of B - A, bootstrap 95 % CI low, high)} over the seeds, resampled with ``rng``.
+    Raises ``ValueError`` naming what is missing when the runs share no seed.
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"rng={rng!r} is invalid: must be a numpy.random.Generator")
+    if isinstance(n_boot, bool) or not isinstance(n_boot, int) or n_boot < 1:
+        raise ValueError(f"n_boot={n_boot!r} is invalid: must be an integer >= 1")
+    policy_b = policy_a if policy_b is None else policy_b
+    a, b = run_outcomes(rows_a, policy_a, criteria), run_outcomes(rows_b, policy_b, criteria)
+    for label, name, got in (("A", policy_a, a), ("B", policy_b, b)):
+        if not got:
+            raise ValueError(f"run {label} has no quadrotor rows of policy {name!r}")
+        seen, counts = np.unique(got["seed"], return_counts=True)
+        if (counts > 1).any():
+            raise ValueError(
+                f"run {label} has seed {int(seen[counts > 1][0])} more than once: pool "
+                "folders of distinct seeds"
+            )
+    seeds = np.intersect1d(a["seed"], b["seed"])
+    if seeds.size == 0:
+        raise ValueError("the two runs share no seed: nothing to pair")
+    ia = np.searchsorted(a["seed"], seeds)  # run_outcomes gives the seeds in order
+    ib = np.searchsorted(b["seed"], seeds)
+    keys = [k for k in CRITERIA_KEYS if k in a and k in b]
+    out: dict[str, Any] = {"seeds": seeds, "misses": {}, "discordant": {}, "change": {}}
+    for k in keys:
+        pa, pb = a[k][ia], b[k][ib]
+        out["misses"][k] = (int((~pa).sum()), int((~pb).sum()))
+        only_a, only_b = int((~pa & pb).sum()), int((pa & ~pb).sum())
+        p = binomtest(only_a, only_a + only_b, 0.5).pvalue if only_a + only_b else 1.0
+        out["discordant"][k] = (only_a, only_b, float(p))
+    every_a = np.all([a[k][ia] for k in keys], axis=0)
+    every_b = np.all([b[k][ib] for k in keys], axis=0)
+    out["all_pass"] = (int(every_a.sum()), int(every_b.sum()))
+    metrics = dict.fromkeys(CRITERIA_KEYS[k][0] for k in keys if k != "no_crash")
+    for m in metrics:
+        d = _metric(rows_b, policy_b, m, seeds) - _metric(rows_a, policy_a, m, seeds)
+        boot = np.median(rng.choice(d, size=(n_boot, d.size)), axis=1)
+        lo, hi = np.percentile(boot, [2.5, 97.5])
+        out["change"][m] = (float(np.median(d)), float(lo), float(hi))
+    return out
+
+
+def paired_lines(result: Mapping[str, Any], label_a: str = "A", label_b: str = "B") -> list[str]:
+    """Markdown tables of :func:`compare_runs`' result."""
+    n = len(result["seeds"])
+    lines = [
+        f"{n} seeds in both runs; runs that miss each criterion, and the runs that miss it "
+        "in one of the two only (exact McNemar p, two-sided):",
+        "",
+        f"| criterion | {label_a}: misses | {label_b}: misses | {label_a} only | "
+        f"{label_b} only | p |",
+        "|---|---|---|---|---|---|",
+    ]
+    for k, (ma, mb) in result["misses"].items():
+        oa, ob, p = result["discordant"][k]
+        lines.append(f"| {k} | {ma} | {mb} | {oa} | {ob} | {p:.3g} |")
+    pa, pb = result["all_pass"]
+    lines += [f"| runs meeting all | {pa} | {pb} | | | |", ""]
+    lines += [
+        f"Paired change {label_b} - {label_a} of each criterion's metric (median over seeds, "
+        "bootstrap 95 % CI):",
+        "",
+        "| metric | median change | 95 % CI |",
+        "|---|---|---|",
+    ]
+    for m, (med, lo, hi) in result["change"].items():
+        lines.append(f"| {m} | {med:+.4f} | [{lo:+.4f}, {hi:+.4f}] |")
+    return lines
