@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["load_rows", "main"]
+__all__ = ["build_parser", "load_rows", "main"]
 
 
 def load_rows(folders: Sequence[str | Path], flag: str) -> list[dict[str, str]]:
@@ -35,9 +35,8 @@ def load_rows(folders: Sequence[str | Path], flag: str) -> list[dict[str, str]]:
     return rows
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    from baselines.reporting.quadrotor_paired import compare_runs, paired_lines
-
+def build_parser() -> argparse.ArgumentParser:
+    """The command line of ``python -m baselines.quadrotor_compare``."""
     ap = argparse.ArgumentParser(
         prog="python -m baselines.quadrotor_compare",
         description=__doc__.split("\n\n")[0],
@@ -55,6 +54,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--against-label", default="B", help="name of run B in the tables")
     ap.add_argument("--bootstrap", type=int, default=4000, help="bootstrap resamples")
     ap.add_argument("--seed", type=int, default=0, help="seed of the bootstrap's generator")
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    from baselines.reporting.quadrotor_paired import compare_runs, paired_lines
+
+    ap = build_parser()
     args = ap.parse_args(argv)
     if args.bootstrap < 1:
         ap.error(f"--bootstrap {args.bootstrap} is invalid: must be >= 1")
