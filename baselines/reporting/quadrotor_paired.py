@@ -78,7 +78,7 @@ def compare_runs(
     every_a = np.all([a[k][ia] for k in keys], axis=0)
     every_b = np.all([b[k][ib] for k in keys], axis=0)
     out["all_pass"] = (int(every_a.sum()), int(every_b.sum()))
-    metrics = dict.fromkeys(CRITERIA_KEYS[k][0] for k in keys if k != "no_crash")
+    metrics = dict.fromkeys(CRITERIA_KEYS[k] for k in keys if k != "no_crash")
     for m in metrics:
         d = _metric(rows_b, policy_b, m, seeds) - _metric(rows_a, policy_a, m, seeds)
         boot = np.median(rng.choice(d, size=(n_boot, d.size)), axis=1)
