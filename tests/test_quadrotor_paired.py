@@ -88,7 +88,11 @@ def test_compare_counts_discordant_runs_and_pairs_by_seed():
     [
         (dict(rng=0), TypeError, "rng=0 is invalid"),
         (dict(rng=np.random.default_rng(0), n_boot=0), ValueError, "n_boot=0 is invalid"),
-        (dict(rng=np.random.default_rng(0), policy_a="zero"), ValueError, "policy 'zero'"),
+        (
+            dict(rng=np.random.default_rng(0), policy_a="zero"),
+            ValueError,
+            r"policy 'zero'; it has \['smc'\]",
+        ),
     ],
 )
 def test_compare_refuses_bad_input(kwargs, exc, match):

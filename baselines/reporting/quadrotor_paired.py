@@ -53,9 +53,12 @@ def compare_runs(
         raise ValueError(f"n_boot={n_boot!r} is invalid: must be an integer >= 1")
     policy_b = policy_a if policy_b is None else policy_b
     a, b = run_outcomes(rows_a, policy_a, criteria), run_outcomes(rows_b, policy_b, criteria)
-    for label, name, got in (("A", policy_a, a), ("B", policy_b, b)):
+    for label, name, got, rows in (("A", policy_a, a, rows_a), ("B", policy_b, b, rows_b)):
         if not got:
-            raise ValueError(f"run {label} has no quadrotor rows of policy {name!r}")
+            there = sorted({r["policy"] for r in rows if r["dynamics"] == "quadrotor"})
+            raise ValueError(
+                f"run {label} has no quadrotor rows of policy {name!r}; it has {there or 'none'}"
+            )
         seen, counts = np.unique(got["seed"], return_counts=True)
         if (counts > 1).any():
             raise ValueError(
