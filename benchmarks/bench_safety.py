@@ -157,10 +157,17 @@ def _timed(obj, name: str, acc: dict, label: str) -> None:
     setattr(obj, name, wrapper)
 
 
-def in_step(N: int, B: int, limit: float, steps: int, lookahead: float | None = None) -> None:
+def in_step(
+    N: int,
+    B: int,
+    limit: float,
+    steps: int,
+    lookahead: float | None = None,
+    preset: str = "paper",
+) -> None:
     """Per-stage times of core.step with the filter on (module docstring)."""
     cfg = make_config(
-        "paper",
+        preset,
         n_uavs=N,
         pair_accel_limit=limit,
         safety_filter="cbf",
@@ -185,13 +192,14 @@ def in_step(N: int, B: int, limit: float, steps: int, lookahead: float | None = 
         parts["total core.step"] = total
         rows.append(parts)
         active.append(bool(res.info["safety_active"].any()))
-    _step_table(rows, np.array(active), N, B, limit, steps, lookahead)
+    _step_table(rows, np.array(active), N, B, limit, steps, lookahead, cfg)
 
 
-def _step_table(rows, active, N, B, limit, steps, lookahead) -> None:
+def _step_table(rows, active, N, B, limit, steps, lookahead, cfg) -> None:
     look = "" if lookahead is None else f", safety_lookahead_range = {lookahead:g}"
     print(
-        f"\n## Stages of core.step with safety_filter='cbf' (smc, N = {N}, B = {B}, "
+        f"\n## Stages of core.step with safety_filter='cbf' (smc, preset {cfg.preset!r}, "
+        f"N = {N}, {len(cfg.pairs)} pairs, B = {B}, neighbor_search {cfg.neighbor_search!r}, "
         f"pair_accel_limit = {limit:g}{look}, {steps} steps from the reset; CPU time, medians "
         "over steps)\n"
     )
@@ -275,6 +283,11 @@ def main(argv=None) -> None:
     ap.add_argument(
         "--lookahead", type=float, default=None, help="--in-step: safety_lookahead_range (m)"
     )
+    ap.add_argument(
+        "--preset",
+        default="paper",
+        help="--in-step: the task's preset (e.g. large: 10 pairs, the grid search)",
+    )
     ap.add_argument("--vecenv", action="store_true", help="SB3 VecEnv throughput off vs on")
     args = ap.parse_args(argv)
     if args.vecenv:
@@ -284,7 +297,7 @@ def main(argv=None) -> None:
         assumptions(args.n)
         return
     if args.in_step:
-        in_step(args.n, args.b, args.limit, args.steps, args.lookahead)
+        in_step(args.n, args.b, args.limit, args.steps, args.lookahead, args.preset)
         return
     repeats, min_time = (5, 0.1) if args.quick else (15, 0.3)
     N, B = args.n, args.b
