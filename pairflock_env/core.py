@@ -291,7 +291,8 @@ class PairFlockCore:
         self._require_reset()
         a = self.check_actions(actions)  # 1. validate (raises before any state change)
         u, clipped = self.decode_actions(a)  # 2. decode: the pair command u, m/s^2
-        u = self.safety.apply(self.q, self.p, self._flock_out["acc"], u)  # 2b. safety filter
+        grid = self.neighbor_grid  # of this state, from the last sweep (None: all pairs)
+        u = self.safety.apply(self.q, self.p, self._flock_out["acc"], u, grid)  # 2b. safety filter
         with np.errstate(**_CHECKED_FP):
             a_des = self._desired_acceleration(u)  # 3. flocking + pair term (+ disturbance)
             self.vehicle.advance(self.q, self.p, a_des)  # 4. the vehicle model tracks a_des

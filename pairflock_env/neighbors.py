@@ -510,6 +510,12 @@ class NeighborGrid:
         return self
 
     @property
+    def positions(self) -> np.ndarray | None:
+        """The positions (B, N, dim) the grid was last built from (the array itself, not a
+        copy; None before the first :meth:`build`)."""
+        return self._q
+
+    @property
     def ok(self) -> np.ndarray:
         """(B,) bool: swarms the grid holds (the others are searched by all pairs)."""
         return self.arrays.ok

@@ -3,13 +3,18 @@ the barrier constraints with the batched filter loop (:mod:`.barrier`, docs/safe
 
 They live in one module on purpose: numba's on-disk cache keys a compiled function on its
 own source file only, so a kernel calling a jitted function from another file could keep
-running a stale compiled copy of it after that file changed.
+running a stale compiled copy of it after that file changed. The one call out is the grid
+query ``within_radius`` of :mod:`pairflock_env.neighbors` (one neighbour search for the whole
+project), as in the flocking sweeps: after editing ``neighbors.py``, clear the numba cache
+(the ``__pycache__`` folders) before trusting a run of the filter on the grid.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
+
+from ..neighbors import within_radius
 
 #: the nominal command satisfied every constraint and the bound (returned unchanged)
 STATUS_NOMINAL = 0
@@ -321,11 +326,93 @@ def _entry_radius(V, a, Ds, T, c, tau=0.0):
 
 
 @njit(cache=True, nogil=True)
-def _constraints(b, i, mate, q, p, f, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, tau, U, G, rhs, n):
+def _constrain_one(
+    b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, tau, U, G, rhs, n, K, hmin
+):
+    """Agent i's constraint against UAV j, appended to G, rhs when it binds; returns (K, hmin,
+    ok), ok False for a non-finite pair (the caller then stops)."""
+    D = q.shape[2]
+    d2 = 0.0
+    w2 = 0.0
+    for k in range(D):
+        d2 += (q[b, i, k] - q[b, j, k]) ** 2
+        w2 += (p[b, i, k] - p[b, j, k]) ** 2
+    if not (np.isfinite(d2) and np.isfinite(w2)):
+        return K, hmin, False
+    if d2 >= R2 and j != mate:
+        if d2 >= RL2:
+            return K, hmin, True
+        d = np.sqrt(d2)
+        V = 0.0  # closing speed along the line of sight
+        for k in range(D):
+            V -= (q[b, i, k] - q[b, j, k]) * (p[b, i, k] - p[b, j, k]) / d
+        a = 2.0 * alpha if coop[j] else alpha - A_o
+        if d >= _entry_radius(V, a, Ds, T, c, tau):
+            return K, hmin, True  # the radius condition (b) still holds for it
+    d = np.sqrt(d2)
+    for k in range(D):
+        n[k] = (q[b, i, k] - q[b, j, k]) / d if d > 0.0 else 0.0
+    if d == 0.0:  # coincident: any direction, opposite for the two UAVs
+        n[0] = 1.0 if i < j else -1.0
+    v = 0.0
+    nf = 0.0
+    for k in range(D):
+        v += n[k] * (p[b, i, k] - p[b, j, k])
+        nf += n[k] * f[k]
+    a = 2.0 * alpha if coop[j] else alpha - A_o
+    eps = 0.0
+    if c < 1.0:  # rotation of n within the step (docs/safety.md)
+        amax = 2.0 * (fn + U) if coop[j] else fn + U + A_o
+        geo = min(2.0, 2.0 * T * (np.sqrt(w2) + c * T * amax) / (d + min(d, Ds)))
+        eps = (1.0 - c) * T * amax * geo
+    H, smin = _sigma_min(d - Ds, v, eps, a, T, c, lam, tau)
+    hmin = min(hmin, H)
+    need = 0.5 * smin if coop[j] else smin + A_o
+    if need - nf <= -U:
+        return K, hmin, True  # implied by ||u|| <= U
+    for k in range(D):
+        G[K, k] = n[k]
+    rhs[K] = need - nf
+    return K + 1, hmin, True
+
+
+@njit(cache=True, nogil=True)
+def _constraints(
+    b,
+    i,
+    mate,
+    q,
+    p,
+    f,
+    coop,
+    Ds,
+    alpha,
+    A_o,
+    R2,
+    RL2,
+    lam,
+    T,
+    c,
+    tau,
+    U,
+    G,
+    rhs,
+    n,
+    grid,
+    g,
+    hits,
+    pt,
+):
     """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok).
     UAV ``mate`` (the partner; -1: none) is constrained at any distance, the others within
     the sensing radius, and beyond it up to the lookahead range (squared: RL2) those that
-    close fast enough for their braking distance to reach them."""
+    close fast enough for their braking distance to reach them.
+
+    ``grid`` True: the candidates are the UAVs the neighbour grid ``g`` finds within the
+    larger of the two ranges (``within_radius``, in increasing index order, into ``hits``),
+    with the partner merged in at its index: the same UAVs in the same order as the scan of
+    all N, so the same constraints (the caller uses it only for a swarm the grid holds whose
+    state is finite and bounded, where the scan would skip exactly the UAVs out of range)."""
     N, D = q.shape[1], q.shape[2]
     K = 0
     hmin = np.inf
@@ -335,58 +422,132 @@ def _constraints(b, i, mate, q, p, f, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, 
     fn = np.sqrt(fn)
     if not np.isfinite(fn):
         return 0, np.nan, False
+    ok = True
+    if grid:
+        for k in range(D):
+            pt[k] = q[b, i, k]
+        nh = within_radius(q, b, pt, max(R2, RL2), i, g, hits)
+        pending = mate >= 0
+        for t in range(nh + 1):
+            j = hits[t] if t < nh else N  # N: past the last hit
+            if pending and mate <= j:
+                pending = False
+                K, hmin, ok = _constrain_one(
+                    b,
+                    i,
+                    mate,
+                    mate,
+                    q,
+                    p,
+                    f,
+                    fn,
+                    coop,
+                    Ds,
+                    alpha,
+                    A_o,
+                    R2,
+                    RL2,
+                    lam,
+                    T,
+                    c,
+                    tau,
+                    U,
+                    G,
+                    rhs,
+                    n,
+                    K,
+                    hmin,
+                )
+                if not ok:
+                    return 0, np.nan, False
+                if mate == j:
+                    continue
+            if t < nh:
+                K, hmin, ok = _constrain_one(
+                    b,
+                    i,
+                    j,
+                    mate,
+                    q,
+                    p,
+                    f,
+                    fn,
+                    coop,
+                    Ds,
+                    alpha,
+                    A_o,
+                    R2,
+                    RL2,
+                    lam,
+                    T,
+                    c,
+                    tau,
+                    U,
+                    G,
+                    rhs,
+                    n,
+                    K,
+                    hmin,
+                )
+                if not ok:
+                    return 0, np.nan, False
+        return K, hmin, True
     for j in range(N):
         if j == i:
             continue
-        d2 = 0.0
-        w2 = 0.0
-        for k in range(D):
-            d2 += (q[b, i, k] - q[b, j, k]) ** 2
-            w2 += (p[b, i, k] - p[b, j, k]) ** 2
-        if not (np.isfinite(d2) and np.isfinite(w2)):
+        K, hmin, ok = _constrain_one(
+            b,
+            i,
+            j,
+            mate,
+            q,
+            p,
+            f,
+            fn,
+            coop,
+            Ds,
+            alpha,
+            A_o,
+            R2,
+            RL2,
+            lam,
+            T,
+            c,
+            tau,
+            U,
+            G,
+            rhs,
+            n,
+            K,
+            hmin,
+        )
+        if not ok:
             return 0, np.nan, False
-        if d2 >= R2 and j != mate:
-            if d2 >= RL2:
-                continue
-            d = np.sqrt(d2)
-            V = 0.0  # closing speed along the line of sight
-            for k in range(D):
-                V -= (q[b, i, k] - q[b, j, k]) * (p[b, i, k] - p[b, j, k]) / d
-            a = 2.0 * alpha if coop[j] else alpha - A_o
-            if d >= _entry_radius(V, a, Ds, T, c, tau):
-                continue  # the radius condition (b) still holds for it
-        d = np.sqrt(d2)
-        for k in range(D):
-            n[k] = (q[b, i, k] - q[b, j, k]) / d if d > 0.0 else 0.0
-        if d == 0.0:  # coincident: any direction, opposite for the two UAVs
-            n[0] = 1.0 if i < j else -1.0
-        v = 0.0
-        nf = 0.0
-        for k in range(D):
-            v += n[k] * (p[b, i, k] - p[b, j, k])
-            nf += n[k] * f[k]
-        a = 2.0 * alpha if coop[j] else alpha - A_o
-        eps = 0.0
-        if c < 1.0:  # rotation of n within the step (docs/safety.md)
-            amax = 2.0 * (fn + U) if coop[j] else fn + U + A_o
-            geo = min(2.0, 2.0 * T * (np.sqrt(w2) + c * T * amax) / (d + min(d, Ds)))
-            eps = (1.0 - c) * T * amax * geo
-        H, smin = _sigma_min(d - Ds, v, eps, a, T, c, lam, tau)
-        hmin = min(hmin, H)
-        need = 0.5 * smin if coop[j] else smin + A_o
-        if need - nf <= -U:
-            continue  # implied by ||u|| <= U
-        for k in range(D):
-            G[K, k] = n[k]
-        rhs[K] = need - nf
-        K += 1
     return K, hmin, True
 
 
 @njit(cache=True, nogil=True)
-def _filter_kernel(q, p, f, un, agents, mates, coop, pr, u, active, corr, infeas, hmin):
+def _grid_usable(q, p, b, g):
+    """Whether swarm b may take its candidates from the grid: the grid holds it, and every
+    position and velocity is finite with |p| < 1e150, so that no pair the grid skips could
+    have made the scan of all N stop at a non-finite distance or speed."""
+    if not g.ok[b]:
+        return False
+    for j in range(q.shape[1]):
+        for k in range(q.shape[2]):
+            if not (np.isfinite(q[b, j, k]) and abs(p[b, j, k]) < 1e150):
+                return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _filter_kernel(
+    q, p, f, un, agents, mates, coop, pr, use_grid, g, u, active, corr, infeas, hmin
+):
     B, M, D = un.shape
     N = q.shape[1]
+    hits = np.zeros(max(N, 1), np.int64)
+    pt = np.zeros(3)
     Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
     RL2, tau = pr[8], pr[9]
     G = np.zeros((max(N, 1), 3))
@@ -399,6 +560,7 @@ def _filter_kernel(q, p, f, un, agents, mates, coop, pr, u, active, corr, infeas
     uo = np.zeros(3)
     nv = np.zeros(3)
     for b in range(B):
+        grid = use_grid and _grid_usable(q, p, b, g)
         for m in range(M):
             K, h, ok = _constraints(
                 b,
@@ -421,6 +583,10 @@ def _filter_kernel(q, p, f, un, agents, mates, coop, pr, u, active, corr, infeas
                 G,
                 rhs,
                 nv,
+                grid,
+                g,
+                hits,
+                pt,
             )
             hmin[b, m] = h
             for k in range(D):

@@ -28,10 +28,12 @@ distance itself still obeys e+ >= min(e, 0)).
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import numpy as np
 import numpy.typing as npt
 
+from ..neighbors import NeighborGrid
 from ._kernels import _filter_kernel
 from .params import SafetyParams
 
@@ -143,6 +145,7 @@ class SafetyFilter:
         flock_accel: npt.ArrayLike,
         u_nom: npt.ArrayLike,
         out: SafetyOutput | None = None,
+        grid: NeighborGrid | None = None,
     ) -> SafetyOutput:
         """Filter the nominal pair commands of every agent of every swarm.
 
@@ -152,6 +155,11 @@ class SafetyFilter:
             flock_accel: (B, M, dim) each agent's own flocking command f_i, m/s^2.
             u_nom: (B, M, dim) nominal pair commands, m/s^2 (finite).
             out: arrays to fill (from :meth:`allocate`); new ones when None.
+            grid: optional :class:`~pairflock_env.neighbors.NeighborGrid` built from these
+                positions ``q``: each agent then looks only at the UAVs the grid finds within
+                its ranges (and its partner), O(M k) per swarm instead of O(M N), with the
+                same result bit for bit. Swarms the grid does not hold, or whose state is
+                not finite, are scanned in full.
         Returns:
             ``out``, filled.
         """
@@ -170,10 +178,27 @@ class SafetyFilter:
             out = self.allocate(B, D)
         elif out.u.shape != shape:
             raise ValueError(f"out.u has shape {out.u.shape}, expected {shape}")
+        g = self._grid(grid, q)
         o = out
         ag, mates = self.agents, self.partners
-        _filter_kernel(q, p, f, un, ag, mates, self.cooperative, self._pr, *o.arrays())
+        use = grid is not None
+        _filter_kernel(q, p, f, un, ag, mates, self.cooperative, self._pr, use, g, *o.arrays())
         return out
+
+    @staticmethod
+    def _grid(grid: NeighborGrid | None, q: np.ndarray):
+        """The grid's arrays for the kernel (a 1-UAV placeholder when there is none)."""
+        if grid is None:
+            return _no_grid()
+        if not isinstance(grid, NeighborGrid):
+            raise TypeError(f"grid={grid!r} is invalid: must be a NeighborGrid or None")
+        built = grid.positions
+        if built is None or built.shape != q.shape or not (built is q or np.array_equal(built, q)):
+            raise ValueError(
+                "grid is invalid: it must be built from the positions q passed here "
+                "(NeighborGrid.build(q))"
+            )
+        return grid.arrays
 
     @staticmethod
     def _partners(partners, agents: np.ndarray, n_uavs: int) -> np.ndarray:
@@ -201,6 +226,12 @@ class SafetyFilter:
         if a.ndim != 3 or (shape is not None and a.shape != shape):
             raise ValueError(f"{name} has shape {a.shape}, expected {shape or '(B, N, dim)'}")
         return np.ascontiguousarray(a, dtype=np.float64)
+
+
+@functools.cache
+def _no_grid():
+    """Arrays of a 1-UAV grid: what the kernel gets (and ignores) when there is no grid."""
+    return NeighborGrid(1, 1, 2, cell_size=1.0).build(np.zeros((1, 1, 2))).arrays
 
 
 def safety_filter(

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from ..neighbors import NeighborGrid
 from .barrier import SafetyFilter, SafetyOutput
 from .params import SafetyParams
 
@@ -53,7 +54,14 @@ class SafetyStage:
             self.output = self.filter.allocate(B, config.dim)
         self._shape = (B, M)
 
-    def apply(self, q: np.ndarray, p: np.ndarray, flock_acc: np.ndarray, u: np.ndarray):
+    def apply(
+        self,
+        q: np.ndarray,
+        p: np.ndarray,
+        flock_acc: np.ndarray,
+        u: np.ndarray,
+        grid: NeighborGrid | None = None,
+    ):
         """The pair command to apply (B, M, dim): ``u`` itself when the filter is off, else
         a new array with each agent's filtered command.
 
@@ -63,10 +71,12 @@ class SafetyStage:
             flock_acc: the flocking command of every UAV in the current state (B, N, dim);
                 each agent uses its own row only.
             u: the decoded pair command (B, M, dim), m/s^2.
+            grid: the core's neighbour grid of this state, if it has one (the filter then
+                looks up each agent's candidates in it; the result is the same).
         """
         if not self.enabled:
             return u
-        out = self.filter.apply(q, p, flock_acc[:, self.agent_uavs], u, self.output)
+        out = self.filter.apply(q, p, flock_acc[:, self.agent_uavs], u, self.output, grid)
         return out.u.copy()
 
     def info(self, reset: bool = False) -> dict[str, np.ndarray] | None:
