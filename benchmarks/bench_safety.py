@@ -164,16 +164,23 @@ def in_step(
     steps: int,
     lookahead: float | None = None,
     preset: str = "paper",
+    pairs: int | None = None,
+    scan: bool = False,
 ) -> None:
     """Per-stage times of core.step with the filter on (module docstring)."""
+    extra = {} if pairs is None else {"pairs": tuple((2 * k, 2 * k + 1) for k in range(pairs))}
     cfg = make_config(
         preset,
+        **extra,
         n_uavs=N,
         pair_accel_limit=limit,
         safety_filter="cbf",
         safety_lookahead_range=lookahead,
     )
     core = PairFlockCore(cfg, num_envs=B)
+    if scan:  # the filter scans all N UAVs per agent although the core has a grid
+        apply = core.safety.apply
+        core.safety.apply = lambda q, p, f, u, grid=None: apply(q, p, f, u)
     res = core.reset(seed=0)
     smc = SlidingModeController(cfg)
     acc: dict[str, float] = {}
@@ -192,11 +199,13 @@ def in_step(
         parts["total core.step"] = total
         rows.append(parts)
         active.append(bool(res.info["safety_active"].any()))
-    _step_table(rows, np.array(active), N, B, limit, steps, lookahead, cfg)
+    _step_table(rows, np.array(active), N, B, limit, steps, lookahead, cfg, scan)
 
 
-def _step_table(rows, active, N, B, limit, steps, lookahead, cfg) -> None:
+def _step_table(rows, active, N, B, limit, steps, lookahead, cfg, scan=False) -> None:
     look = "" if lookahead is None else f", safety_lookahead_range = {lookahead:g}"
+    if scan:
+        look += ", the filter scanning all N"
     print(
         f"\n## Stages of core.step with safety_filter='cbf' (smc, preset {cfg.preset!r}, "
         f"N = {N}, {len(cfg.pairs)} pairs, B = {B}, neighbor_search {cfg.neighbor_search!r}, "
@@ -288,6 +297,14 @@ def main(argv=None) -> None:
         default="paper",
         help="--in-step: the task's preset (e.g. large: 10 pairs, the grid search)",
     )
+    ap.add_argument(
+        "--pairs", type=int, default=None, help="--in-step: K pairs (0, 1), (2, 3), ..."
+    )
+    ap.add_argument(
+        "--scan",
+        action="store_true",
+        help="--in-step: the filter scans all N UAVs per agent, not the core's grid",
+    )
     ap.add_argument("--vecenv", action="store_true", help="SB3 VecEnv throughput off vs on")
     args = ap.parse_args(argv)
     if args.vecenv:
@@ -297,7 +314,16 @@ def main(argv=None) -> None:
         assumptions(args.n)
         return
     if args.in_step:
-        in_step(args.n, args.b, args.limit, args.steps, args.lookahead, args.preset)
+        in_step(
+            args.n,
+            args.b,
+            args.limit,
+            args.steps,
+            args.lookahead,
+            args.preset,
+            args.pairs,
+            args.scan,
+        )
         return
     repeats, min_time = (5, 0.1) if args.quick else (15, 0.3)
     N, B = args.n, args.b

@@ -325,7 +325,7 @@ def _entry_radius(V, a, Ds, T, c, tau=0.0):
     return Ds + V * (T + tau) + x * x / (2.0 * a)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False, inline="always")  # see _constraints
 def _constrain_one(
     b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, tau, U, G, rhs, n, K, hmin
 ):
@@ -376,7 +376,10 @@ def _constrain_one(
     return K + 1, hmin, True
 
 
-@njit(cache=True, nogil=True)
+# Called once per UAV and agent, so compiled without numba's reference counting (it never
+# allocates): the count updates numba adds around a call taking arrays cost several times the
+# call itself (as in pairflock_env.neighbors).
+@njit(cache=True, nogil=True, _nrt=False)
 def _constraints(
     b,
     i,
@@ -526,7 +529,7 @@ def _constraints(
     return K, hmin, True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _grid_usable(q, p, b, g):
     """Whether swarm b may take its candidates from the grid: the grid holds it, and every
     position and velocity is finite with |p| < 1e150, so that no pair the grid skips could
