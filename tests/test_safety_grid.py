@@ -118,3 +118,23 @@ def test_the_grid_is_really_consulted():
     q[0, N - 1] = [2.0, 0.0]  # now right ahead of agent 0, closing at 20 m/s
     scan, fast = filt.apply(q, p, f, un), filt.apply(q, p, f, un, grid=grid)
     assert scan.active[0, 0] and not fast.active[0, 0]
+
+
+@pytest.mark.parametrize(
+    "hits, mate, expected",
+    [
+        ([2, 5, 9], 7, [2, 5, 7, 9]),
+        ([2, 5, 9], 5, [2, 5, 9]),  # already found by the grid
+        ([2, 5, 9], 0, [0, 2, 5, 9]),
+        ([2, 5, 9], 12, [2, 5, 9, 12]),
+        ([], 3, [3]),
+        ([2, 5], -1, [2, 5]),  # no partner
+    ],
+)
+def test_partner_is_merged_at_its_index(hits, mate, expected):
+    from pairflock_env.safety._kernels import _with_partner
+
+    buf = np.full(len(hits) + 1, -7, np.int64)
+    buf[: len(hits)] = hits
+    n = _with_partner(buf, len(hits), mate)
+    assert buf[:n].tolist() == expected

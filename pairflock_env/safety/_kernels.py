@@ -425,108 +425,40 @@ def _constraints(
     fn = np.sqrt(fn)
     if not np.isfinite(fn):
         return 0, np.nan, False
-    ok = True
     if grid:
         for k in range(D):
             pt[k] = q[b, i, k]
-        nh = within_radius(q, b, pt, max(R2, RL2), i, g, hits)
-        pending = mate >= 0
-        for t in range(nh + 1):
-            j = hits[t] if t < nh else N  # N: past the last hit
-            if pending and mate <= j:
-                pending = False
-                K, hmin, ok = _constrain_one(
-                    b,
-                    i,
-                    mate,
-                    mate,
-                    q,
-                    p,
-                    f,
-                    fn,
-                    coop,
-                    Ds,
-                    alpha,
-                    A_o,
-                    R2,
-                    RL2,
-                    lam,
-                    T,
-                    c,
-                    tau,
-                    U,
-                    G,
-                    rhs,
-                    n,
-                    K,
-                    hmin,
-                )
-                if not ok:
-                    return 0, np.nan, False
-                if mate == j:
-                    continue
-            if t < nh:
-                K, hmin, ok = _constrain_one(
-                    b,
-                    i,
-                    j,
-                    mate,
-                    q,
-                    p,
-                    f,
-                    fn,
-                    coop,
-                    Ds,
-                    alpha,
-                    A_o,
-                    R2,
-                    RL2,
-                    lam,
-                    T,
-                    c,
-                    tau,
-                    U,
-                    G,
-                    rhs,
-                    n,
-                    K,
-                    hmin,
-                )
-                if not ok:
-                    return 0, np.nan, False
-        return K, hmin, True
-    for j in range(N):
+        nc = _with_partner(hits, within_radius(q, b, pt, max(R2, RL2), i, g, hits), mate)
+    else:
+        nc = N
+    for t in range(nc):
+        j = hits[t] if grid else t
         if j == i:
             continue
         K, hmin, ok = _constrain_one(
-            b,
-            i,
-            j,
-            mate,
-            q,
-            p,
-            f,
-            fn,
-            coop,
-            Ds,
-            alpha,
-            A_o,
-            R2,
-            RL2,
-            lam,
-            T,
-            c,
-            tau,
-            U,
-            G,
-            rhs,
-            n,
-            K,
-            hmin,
-        )
+            b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, tau, U, G,
+            rhs, n, K, hmin,
+        )  # fmt: skip
         if not ok:
             return 0, np.nan, False
     return K, hmin, True
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def _with_partner(hits, nh, mate):
+    """Insert ``mate`` (>= 0) into the increasing indices hits[:nh] unless it is there;
+    returns the new count (hits has room for one more)."""
+    if mate < 0:
+        return nh
+    t = nh
+    while t > 0 and hits[t - 1] > mate:
+        t -= 1
+    if t > 0 and hits[t - 1] == mate:
+        return nh
+    for s in range(nh, t, -1):
+        hits[s] = hits[s - 1]
+    hits[t] = mate
+    return nh + 1
 
 
 @njit(cache=True, nogil=True, _nrt=False)
