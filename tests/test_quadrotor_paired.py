@@ -14,7 +14,7 @@ from scipy.stats import binomtest
 
 from baselines.reporting.criteria import QUADROTOR, check_quadrotor
 from baselines.reporting.quadrotor_criteria import CRITERIA_KEYS, run_outcomes
-from baselines.reporting.quadrotor_paired import compare_runs, paired_lines
+from baselines.reporting.quadrotor_paired import compare_runs, mcnemar_exact, paired_lines
 
 C = QUADROTOR
 
@@ -59,6 +59,18 @@ def test_run_outcomes_are_what_the_set_check_decides_on():
     quad = [r for r in rows if r["dynamics"] == "quadrotor"]
     assert "attitude_cost" not in run_outcomes(quad, "smc") and len(check_quadrotor(quad)) == 6
     assert run_outcomes(rows, "proportional") == {}
+
+
+def test_exact_mcnemar_matches_scipy():
+    for a in range(0, 25, 3):
+        for b in range(0, 25, 4):
+            ref = binomtest(a, a + b, 0.5).pvalue if a + b else 1.0
+            assert mcnemar_exact(a, b) == pytest.approx(ref, rel=1e-12, abs=1e-15)
+    assert mcnemar_exact(3, 10) == pytest.approx(0.09228515625)
+    with pytest.raises(ValueError, match="only_a=-1 is invalid"):
+        mcnemar_exact(-1, 2)
+    with pytest.raises(ValueError, match=r"only_b=1\.5 is invalid"):
+        mcnemar_exact(1, 1.5)
 
 
 def test_compare_counts_discordant_runs_and_pairs_by_seed():

@@ -58,10 +58,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from baselines.reporting.quadrotor_paired import compare_runs, paired_lines
-
     ap = build_parser()
     args = ap.parse_args(argv)
+    from baselines.reporting.quadrotor_paired import compare_runs, paired_lines
+
     if args.bootstrap < 1:
         ap.error(f"--bootstrap {args.bootstrap} is invalid: must be >= 1")
     rows_a = load_rows(args.runs, "runs")

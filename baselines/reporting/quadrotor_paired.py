@@ -8,15 +8,29 @@ baselines.quadrotor_compare``, docs/safety.md "Per run rather than per set").
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from scipy.stats import binomtest
 
 from .quadrotor_criteria import CRITERIA_KEYS, QUADROTOR, QuadrotorCriteria, run_outcomes
 
-__all__ = ["compare_runs", "paired_lines"]
+__all__ = ["compare_runs", "mcnemar_exact", "paired_lines"]
+
+
+def mcnemar_exact(only_a: int, only_b: int) -> float:
+    """Two-sided exact McNemar p for ``only_a`` and ``only_b`` discordant pairs: twice the
+    smaller binomial(n, 1/2) tail, at most 1 (1 when there are none). The tests check it
+    against scipy's ``binomtest``."""
+    for name, v in (("only_a", only_a), ("only_b", only_b)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
+            raise ValueError(f"{name}={v!r} is invalid: must be an integer >= 0")
+    n, k = int(only_a) + int(only_b), min(int(only_a), int(only_b))
+    if n == 0:
+        return 1.0
+    tail = sum(math.comb(n, i) for i in range(k + 1)) / 2.0**n
+    return min(1.0, 2.0 * tail)
 
 
 def _metric(rows, name: str, key: str, seeds: np.ndarray) -> np.ndarray:
@@ -76,8 +90,7 @@ def compare_runs(
         pa, pb = a[k][ia], b[k][ib]
         out["misses"][k] = (int((~pa).sum()), int((~pb).sum()))
         only_a, only_b = int((~pa & pb).sum()), int((pa & ~pb).sum())
-        p = binomtest(only_a, only_a + only_b, 0.5).pvalue if only_a + only_b else 1.0
-        out["discordant"][k] = (only_a, only_b, float(p))
+        out["discordant"][k] = (only_a, only_b, mcnemar_exact(only_a, only_b))
     every_a = np.all([a[k][ia] for k in keys], axis=0)
     every_b = np.all([b[k][ib] for k in keys], axis=0)
     out["all_pass"] = (int(every_a.sum()), int(every_b.sum()))
