@@ -9,27 +9,11 @@ import csv
 import dataclasses
 
 import pytest
+from quadrotor_rows import quad_row as _row
 
 from baselines.reporting.criteria import QUADROTOR, check_quadrotor
 
 LEARNED = "sb3:pair_quad3d"  # the packaged 3-D policy (train/configs/pair_quad3d.yaml)
-
-
-def _row(policy: str, dynamics: str, seed: int, **over) -> dict:
-    c = QUADROTOR
-    row = {
-        "dynamics": dynamics,
-        "policy": policy,
-        "seed": seed,
-        "band_entry_time": c.band_entry_by / 2,
-        "straight_max_error": c.straight_max / 2,
-        "turn_peak_error": c.turn_peak_max / 2,
-        "min_distance": 2 * c.min_distance,
-        "velocity_mismatch": c.velocity_tolerance / 2,
-        "crashed": 0,
-        "steps_run": 10,
-    }
-    return {**row, **over}
 
 
 def test_the_criteria_apply_to_any_named_controller_and_keep_smc_lines():

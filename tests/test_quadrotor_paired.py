@@ -10,6 +10,7 @@ import sys
 
 import numpy as np
 import pytest
+from quadrotor_rows import quad_row
 from scipy.stats import binomtest
 
 from baselines.reporting.criteria import QUADROTOR, check_quadrotor
@@ -20,19 +21,7 @@ C = QUADROTOR
 
 
 def _row(policy: str, dynamics: str, seed: int, **over) -> dict:
-    row = {
-        "dynamics": dynamics,
-        "policy": policy,
-        "seed": str(seed),  # as read back from results.csv
-        "band_entry_time": C.band_entry_by / 2,
-        "straight_max_error": C.straight_max / 2,
-        "turn_peak_error": C.turn_peak_max / 2,
-        "min_distance": 2 * C.min_distance,
-        "velocity_mismatch": C.velocity_tolerance / 2,
-        "crashed": 0,
-        "steps_run": 10,
-    }
-    return {**row, **over}
+    return quad_row(policy, dynamics, str(seed), **over)  # seeds as read back from a CSV
 
 
 def _runs(turn_miss: set[int], sep_miss: set[int], seeds=range(20), policy="smc", turn=None):

@@ -380,32 +380,7 @@ def _constrain_one(
 # allocates): the count updates numba adds around a call taking arrays cost several times the
 # call itself (as in pairflock_env.neighbors).
 @njit(cache=True, nogil=True, _nrt=False)
-def _constraints(
-    b,
-    i,
-    mate,
-    q,
-    p,
-    f,
-    coop,
-    Ds,
-    alpha,
-    A_o,
-    R2,
-    RL2,
-    lam,
-    T,
-    c,
-    tau,
-    U,
-    G,
-    rhs,
-    n,
-    grid,
-    g,
-    hits,
-    pt,
-):
+def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
     """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok).
     UAV ``mate`` (the partner; -1: none) is constrained at any distance, the others within
     the sensing radius, and beyond it up to the lookahead range (squared: RL2) those that
@@ -417,6 +392,8 @@ def _constraints(
     all N, so the same constraints (the caller uses it only for a swarm the grid holds whose
     state is finite and bounded, where the scan would skip exactly the UAVs out of range)."""
     N, D = q.shape[1], q.shape[2]
+    Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
+    RL2, tau = pr[8], pr[9]
     K = 0
     hmin = np.inf
     fn = 0.0
@@ -483,8 +460,7 @@ def _filter_kernel(
     N = q.shape[1]
     hits = np.zeros(max(N, 1), np.int64)
     pt = np.zeros(3)
-    Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
-    RL2, tau = pr[8], pr[9]
+    U = pr[7]
     G = np.zeros((max(N, 1), 3))
     rhs = np.zeros(max(N, 1))
     W = np.zeros((4, 4, 4))
@@ -498,30 +474,7 @@ def _filter_kernel(
         grid = use_grid and _grid_usable(q, p, b, g)
         for m in range(M):
             K, h, ok = _constraints(
-                b,
-                agents[m],
-                mates[m],
-                q,
-                p,
-                f[b, m],
-                coop,
-                Ds,
-                alpha,
-                A_o,
-                R2,
-                RL2,
-                lam,
-                T,
-                c,
-                tau,
-                U,
-                G,
-                rhs,
-                nv,
-                grid,
-                g,
-                hits,
-                pt,
+                b, agents[m], mates[m], q, p, f[b, m], coop, pr, G, rhs, nv, grid, g, hits, pt
             )
             hmin[b, m] = h
             for k in range(D):
