@@ -89,3 +89,25 @@ def test_the_doctests_run_with_the_suite():
     options = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"]["ini_options"]
     assert "--doctest-modules" in options["addopts"].split()
     assert "pairflock_env" in options["testpaths"]
+
+
+# a repository path as the docs write it: a top-level folder of the project, then a path
+_REPO_PATH = re.compile(
+    r"(?<![\w./-])((?:pairflock_env|baselines|train|tests|benchmarks|docs|models|\.ci)"
+    r"/[\w.\-/]*\w)"
+)
+
+
+def test_every_repository_path_the_docs_name_exists():
+    """A file the README or a docs page points to (`pairflock_env/config/presets.py`) exists.
+
+    Moving a module leaves these behind silently, and mkdocs checks only links."""
+    pages = [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]
+    missing = [
+        f"{page.relative_to(ROOT)}:{number}: {path}"
+        for page in pages
+        for number, line in enumerate(page.read_text().splitlines(), 1)
+        for path in _REPO_PATH.findall(line)
+        if "*" not in path and not (ROOT / path).exists()
+    ]
+    assert not missing, "paths named in the docs that do not exist:\n" + "\n".join(missing)
