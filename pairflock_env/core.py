@@ -108,10 +108,13 @@ class PairFlockCore:
     ) -> None:
         if config is None:
             config = make_config(preset, **overrides)
+        elif not isinstance(config, PairFlockConfig):
+            hint = f" (for a preset: preset={config!r})" if isinstance(config, str) else ""
+            raise TypeError(
+                f"config={config!r} is invalid: must be a PairFlockConfig or None{hint}"
+            )
         elif overrides:
             config = config.replace(**overrides)
-        if not isinstance(config, PairFlockConfig):
-            raise TypeError(f"config={config!r} is invalid: must be a PairFlockConfig")
         check_count("num_envs", num_envs)
         self.config = cfg = config
         self.num_envs = B = int(num_envs)

@@ -124,6 +124,14 @@ def test_reset_options_set_the_state_and_are_validated(small_config):
     assert np.array_equal(core.q, before)
 
 
+def test_a_config_of_the_wrong_type_is_named_with_or_without_overrides():
+    for overrides in ({}, {"n_uavs": 20}):  # a preset name given as the config
+        with pytest.raises(TypeError, match=r"^config='paper' is invalid: .*preset='paper'"):
+            PairFlockCore("paper", **overrides)
+    with pytest.raises(TypeError, match=r"^config=3 is invalid: must be a PairFlockConfig"):
+        PairFlockCore(3, n_uavs=20)
+
+
 def test_step_before_reset_and_bad_actions_leave_state_unchanged(small_config):
     core = PairFlockCore(small_config)
     M, D = core.n_agents, small_config.dim

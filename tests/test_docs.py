@@ -111,3 +111,17 @@ def test_every_repository_path_the_docs_name_exists():
         if "*" not in path and not (ROOT / path).exists()
     ]
     assert not missing, "paths named in the docs that do not exist:\n" + "\n".join(missing)
+
+
+def test_every_console_script_has_its_section_on_the_command_lines_page():
+    """docs/api/cli.md documents each console script's module (its docstring or ``--help``),
+    under the documented ``python -m`` name or the module's own."""
+    tomllib = pytest.importorskip("tomllib")
+    scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
+    page = (DOCS / "api" / "cli.md").read_text()
+    shown = re.findall(r"<!-- cli-help: ([\w.]+):\w+ -->", page)
+    shown += re.findall(r"^::: ([\w.]+)$", page, flags=re.M)
+    names = {m.split(".")[-1] for m in shown}  # baselines.benchmark, ...experiments.benchmark
+    modules = {target.split(":")[0] for target in scripts.values()}
+    missing = sorted(m for m in modules if m.split(".")[-1] not in names)
+    assert not missing, f"console scripts without a section in docs/api/cli.md: {missing}"

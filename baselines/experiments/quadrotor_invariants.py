@@ -121,15 +121,19 @@ def step_response(
     }
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    from baselines.evaluation.parallel import pin_threads
-
-    pin_threads()
+def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(
         prog="python -m baselines.quadrotor_invariants", description=__doc__.split("\n\n")[0]
     )
     ap.add_argument("--seed", type=int, default=0, help="seed of the 65 s scenario run")
-    args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    from baselines.evaluation.parallel import pin_threads
+
+    pin_threads()
+    args = build_parser().parse_args(argv)
     h = hover_drift()
     print(
         f"hover {h['seconds']:g} s (float64): position drift {h['position_drift_m']:.3g} m, "

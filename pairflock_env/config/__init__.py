@@ -11,8 +11,8 @@ A configuration is one flat frozen dataclass, :class:`PairFlockConfig`, so that 
     cfg.radius, cfg.section("flocking").radius       # flat, or by section
 
 Its fields are *declared* in sections (swarm, timing, flocking, leader, pair task, initial
-state, reward, observation, robustness, quadrotor; :mod:`.sections`): each declaration gives
-the type and valid range (a :class:`~.fields.Kind`), the default, the unit and the meaning.
+state, reward, observation, robustness, quadrotor, safety; :mod:`.sections`): each declaration
+gives the type and valid range (a :class:`~.fields.Kind`), the default, the unit and the meaning.
 Validation, error messages, the tables of ``docs/config.md`` and the derived checks are all
 generated from the declarations. An unknown keyword raises ``TypeError`` with a did-you-mean
 hint; a wrong type ``TypeError``; a bad value ``ValueError``; each names the field, the value
