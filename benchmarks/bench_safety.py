@@ -162,7 +162,7 @@ def in_step(
     B: int,
     limit: float,
     steps: int,
-    lookahead: float | None = None,
+    radius: float | None = None,
     preset: str = "paper",
     pairs: int | None = None,
     scan: bool = False,
@@ -175,7 +175,7 @@ def in_step(
         n_uavs=N,
         pair_accel_limit=limit,
         safety_filter="cbf",
-        safety_lookahead_range=lookahead,
+        **({} if radius is None else {"safety_sensing_radius": radius}),
     )
     core = PairFlockCore(cfg, num_envs=B)
     if scan:  # the filter scans all N UAVs per agent although the core has a grid
@@ -199,11 +199,11 @@ def in_step(
         parts["total core.step"] = total
         rows.append(parts)
         active.append(bool(res.info["safety_active"].any()))
-    _step_table(rows, np.array(active), N, B, limit, steps, lookahead, cfg, scan)
+    _step_table(rows, np.array(active), N, B, limit, steps, cfg, scan)
 
 
-def _step_table(rows, active, N, B, limit, steps, lookahead, cfg, scan=False) -> None:
-    look = "" if lookahead is None else f", safety_lookahead_range = {lookahead:g}"
+def _step_table(rows, active, N, B, limit, steps, cfg, scan=False) -> None:
+    look = f", safety_sensing_radius = {cfg.safety_sensing_radius:g} m"
     if scan:
         look += ", the filter scanning all N"
     print(
@@ -290,7 +290,10 @@ def main(argv=None) -> None:
     )
     ap.add_argument("--steps", type=int, default=400, help="--in-step: control steps")
     ap.add_argument(
-        "--lookahead", type=float, default=None, help="--in-step: safety_lookahead_range (m)"
+        "--radius",
+        type=float,
+        default=None,
+        help="--in-step: safety_sensing_radius (m; default: the preset's)",
     )
     ap.add_argument(
         "--preset",
@@ -319,7 +322,7 @@ def main(argv=None) -> None:
             args.b,
             args.limit,
             args.steps,
-            args.lookahead,
+            args.radius,
             args.preset,
             args.pairs,
             args.scan,

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from view_helpers import VIEWS, make_view, reset_view, step_view, zero_action
 
 from baselines.controllers import make_pair_policy
-from pairflock_env import AGENT_INFO_KEYS, PairFlockCore, make_config
+from pairflock_env import AGENT_INFO_KEYS, PairFlockConfig, PairFlockCore, make_config
 from pairflock_env.config.sections.safety import (
     BRAKE_SHARE,
     DECAY,
@@ -128,10 +130,21 @@ def test_cross_field_rules_are_checked_at_construction():
         make_config("paper", safety_sensing_radius=2.0, safety_distance=2.0)
     with pytest.raises(ValueError, match=r"above safety_distance \+ safety_margin \(1 \+ 1.5 m\)"):
         make_config("paper", safety_sensing_radius=2.0, safety_margin=1.5)
-    with pytest.raises(ValueError, match=r"^safety_lookahead_range=10.* >= safety_sensing_radius"):
-        make_config("paper", safety_lookahead_range=10.0)
-    cfg = make_config("paper", safety_lookahead_range=100.0, **CBF)
-    assert SafetyParams.from_config(cfg).lookahead_range == 100.0
+    # the deprecated lookahead range only extends the sensing radius, with a warning
+    for reach, radius in ((10.0, 100.0), (150.0, 150.0)):
+        with pytest.warns(DeprecationWarning, match="safety_lookahead_range.*safety_sensing_r"):
+            cfg = make_config("paper", safety_lookahead_range=reach, **CBF)
+        assert SafetyParams.from_config(cfg).sensing_radius == radius
+    with pytest.warns(DeprecationWarning, match="safety_lookahead_range"):
+        cfg.replace(safety_lookahead_range=120.0)
+    with warnings.catch_warnings():  # a stored config, or None, loads silently
+        warnings.simplefilter("error")
+        assert PairFlockConfig.from_dict(cfg.to_dict()) == cfg
+        make_config("paper", safety_lookahead_range=None)
+    # the quadrotor's unset reaction time 1.5 / quad_attitude_freq must fit the field's range
+    with pytest.raises(ValueError, match=r"^quad_attitude_freq=0.01 is invalid: .*150 s"):
+        make_config("paper-quadrotor", safety_filter="cbf", quad_attitude_freq=0.01)
+    assert make_config("paper-quadrotor", quad_attitude_freq=0.01).safety_filter == "none"
     # the defaults scale with pair_accel_limit, so a small budget stays valid
     assert make_config("paper", pair_accel_limit=1e-3, **CBF).safety_filter == "cbf"
 

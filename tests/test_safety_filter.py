@@ -177,6 +177,94 @@ def test_solver_examples_and_bad_input():
         project([0.0, 0.0], [[1.0, 0.0]], [1.0], -1.0)
 
 
+def test_many_constraints_are_solved_on_a_working_set_exactly():
+    # K > WS_DIRECT: the working set (16 least satisfied, then the most violated) gives the
+    # optimum of the full problem, feasible or not, against the references
+    from pairflock_env.safety._kernels import WS_DIRECT
+
+    rng = np.random.default_rng(9)
+    seen = {STATUS_PROJECTED: 0, STATUS_INFEASIBLE: 0}
+    for i in range(40):
+        D = int(rng.integers(2, 4))
+        K = int(rng.integers(WS_DIRECT + 1, 60))
+        G = rng.normal(size=(K, D))
+        G /= np.linalg.norm(G, axis=1, keepdims=True)
+        un, U = rng.normal(size=D) * 5, rng.uniform(0.5, 5.0)
+        u_in = rng.normal(size=D) * 0.3  # inside every constraint (odd i: pushed out by 0.5)
+        b = G @ u_in - rng.uniform(0.0, 2.0, K) + 0.5 * (i % 2)
+        u, status, t = project(un, G, b, U)
+        assert np.linalg.norm(u) <= U * (1 + 1e-12)
+        if status == STATUS_PROJECTED:
+            np.testing.assert_allclose(u, ref_qcqp(un, G, b, U), atol=1e-6, rtol=0)
+        elif status == STATUS_INFEASIBLE:
+            assert t == pytest.approx(ref_margin(G, b, U), abs=1e-6)
+            assert (G @ u - b).min() >= t - 1e-8
+        seen[status] = seen.get(status, 0) + 1
+    assert seen[STATUS_PROJECTED] >= 10 and seen[STATUS_INFEASIBLE] >= 3
+
+
+def test_the_max_margin_point_stays_in_the_ball():
+    # nearly parallel normals with full-rank differences: the candidate of three constraints
+    # in 2-D is a single point, and rounding once scaled a zero direction out of the ball
+    G = np.array(
+        [
+            [0.6997030869383228, 0.7144337548919295],
+            [0.997565210064089, 0.06973988578847748],
+            [0.9975712160119825, 0.069653922964714],
+            [0.9975664944458416, 0.06972151145116208],
+        ]
+    )
+    G /= np.linalg.norm(G, axis=1, keepdims=True)
+    b = np.array([1029.1763092892359, 990.759292390874, 990.743633275431, 990.7525252972929])
+    U = 1000.0
+    t, u = max_margin(G, b, U)
+    assert np.linalg.norm(u) <= U * (1 + 1e-12)
+    assert t <= U - b.max() and (G @ u - b).min() == pytest.approx(t, abs=1e-9)
+    assert t == pytest.approx(ref_margin(G, b, U), abs=1e-5)
+    u, status, t2 = project([-1000.0, -1000.0], G, b, U)  # b[0] > U: no command meets it
+    assert status == STATUS_INFEASIBLE and t2 == t and np.linalg.norm(u) <= U * (1 + 1e-12)
+
+
+def test_a_dense_crowd_steps_with_every_command_in_the_ball():
+    # 200 UAVs in a 6 m box, a 1 m/s^2 budget, 3-D: every UAV binds. The enumeration's
+    # K^4 once took seconds to minutes per step; the working set caps it, and the agents
+    # whose set would grow past WS_MAX report the step infeasible
+    from pairflock_env import PairFlockCore
+
+    cfg = make_config(
+        "paper", n_uavs=200, dim=3, safety_filter="cbf", pair_accel_limit=1.0, init="random",
+        min_init_spacing=0.0, swarm_half_width=3.0, pair_corner=3.0,
+    )  # fmt: skip
+    core = PairFlockCore(cfg, seed=0)
+    core.reset(seed=0)
+    for _ in range(3):
+        res = core.step(np.zeros((1, core.n_agents, 3)))
+        assert res.info["safety_infeasible"].all()
+        assert np.isfinite(res.info["pair_accel"]).all() and (res.info["pair_accel"] <= 1.0).all()
+
+
+@pytest.mark.parametrize("kw", [dict(substeps=2), dict(integrator="exact")])
+def test_coincident_uavs_step_with_substeps_and_the_exact_integrator(kw):
+    # the rotation bound of n divides by d + min(d, D_s): 0 for coincident UAVs
+    from pairflock_env import PairFlockCore
+
+    core = PairFlockCore(make_config("paper", n_uavs=2, safety_filter="cbf", **kw), seed=0)
+    core.reset(seed=0, options={"positions": np.zeros((2, 2))})
+    res = core.step(np.zeros((1, 2, 2)))
+    assert np.isfinite(core.q).all() and np.isfinite(res.info["pair_accel"]).all()
+
+
+def test_a_subnormal_brake_acceleration_at_the_barrier_stays_finite():
+    from pairflock_env import PairFlockCore
+
+    cfg = make_config(
+        "paper", n_uavs=2, safety_filter="cbf", safety_brake_accel=5e-324, safety_other_accel=0.0
+    )
+    core = PairFlockCore(cfg, seed=0)
+    core.reset(seed=0, options={"positions": np.array([[0.0, 0.0], [1.01, 0.0]])})
+    assert np.isfinite(core.step(np.zeros((1, 2, 2))).info["pair_accel"]).all()
+
+
 # ----------------------------------------------------------------------------- the barrier
 
 
@@ -372,7 +460,7 @@ def test_edge_states_stay_finite():
     q[1, 1] = [P.barrier_distance, 0.0]  # partner at exactly D_s + margin, at rest
     q[1, 2:] = [[30.0, 0.0], [0.0, 30.0]]
     q[2] = [[0, 0], [0, 0], [0, 0], [0, 0]]  # everyone coincident
-    q[3] = [[0, 0], [50, 0], [0, 50], [50, 50]]  # nobody within the sensing radius
+    q[3] = [[0, 0], [1, 0], [0, 1], [1, 1]] * np.array(1.5 * P.sensing_radius)  # none sensed
     un = np.full((4, 2, 2), 10.0)
     out = filt.apply(q, p, np.zeros((4, 2, 2)), un)
     for arr in (out.u, out.correction):
@@ -458,7 +546,7 @@ def test_partner_is_constrained_beyond_the_sensing_radius():
     # Partners 30 m apart (beyond R_s = 20 m) closing at 300 m/s: their braking distance at
     # 2 alpha = 1000 m/s^2 is 45 m, so by the time they are within 20 m no command within
     # the bound can stop them. Given as partners, both start braking now.
-    P = SafetyParams(accel_limit=1000.0, brake_accel=500.0)
+    P = SafetyParams(accel_limit=1000.0, brake_accel=500.0, sensing_radius=20.0)
     q = np.array([[[0.0, 0.0], [30.0, 0.0]]])
     p = np.array([[[150.0, 0.0], [-150.0, 0.0]]])
     f, un = np.zeros((1, 2, 2)), np.zeros((1, 2, 2))
@@ -495,53 +583,36 @@ def test_core_filter_senses_each_agents_partner():
     assert np.array_equal(core.safety.filter.partners, core.partner_uavs)
 
 
-def test_lookahead_range_senses_fast_closers_beyond_the_radius():
-    # An unpaired UAV 30 m ahead (beyond R_s = 20 m) closing at 60 m/s: at alpha - A_o =
-    # 20 m/s^2 its braking distance is about 90 m, so by the time it is within 20 m no
-    # command within the bound can stop the agent. A slow one at the same place is not a
-    # concern there, and neither is a fast one beyond the lookahead range.
-    P = SafetyParams(accel_limit=50.0)
-    assert P.lookahead_range == P.sensing_radius  # None: no lookahead
-    L = dataclasses.replace(P, lookahead_range=100.0)
-    q = np.array([[[0.0, 0.0], [-50.0, 0.0], [30.0, 0.0]]])
-    f, un = np.zeros((1, 1, 2)), np.zeros((1, 1, 2))
-    fast = np.array([[[60.0, 0.0], [0.0, 0.0], [0.0, 0.0]]])  # UAV 1: behind, left behind
-    slow = np.array([[[5.0, 0.0], [0.0, 0.0], [0.0, 0.0]]])
-    assert np.isinf(SafetyFilter(P, [0], 3).apply(q, fast, f, un).barrier).all()
-    out = SafetyFilter(L, [0], 3).apply(q, fast, f, un)
-    assert out.active[0, 0] and out.u[0, 0, 0] < 0 and np.isfinite(out.barrier).all()
-    assert np.isinf(SafetyFilter(L, [0], 3).apply(q, slow, f, un).barrier).all()
-    far = q.copy()
-    far[0, 2, 0] = 120.0
-    assert np.isinf(SafetyFilter(L, [0], 3).apply(far, fast, f, un).barrier).all()
-    # it is sensed exactly once the radius condition fails at its distance
-    r = L.required_sensing_radius(60.0)
-    for dx, seen in ((r + 1e-6, False), (r - 1e-6, True)):
-        qq = q.copy()
-        qq[0, 2, 0] = dx
-        assert np.isfinite(SafetyFilter(L, [0], 3).apply(qq, fast, f, un).barrier[0, 0]) == seen
-    # the whole approach from 120 m: only the lookahead keeps D_s + margin
-    closest = {}
-    for name, params in (
-        ("radius", P),
-        ("lookahead", dataclasses.replace(L, lookahead_range=300.0)),
-    ):
+def test_a_fast_closer_needs_the_radius_its_braking_distance_asks_for():
+    # An unpaired UAV 120 m ahead closing at 60 m/s: at alpha - A_o = 20 m/s^2 its braking
+    # distance is about 90 m (required_sensing_radius). With a 20 m radius it is first sensed
+    # when no command within the bound can stop the agent; with 100 m it is sensed in time,
+    # and the filter then brakes without chattering: it acts once, from the braking curve to
+    # the stop (a sensing rule that took a UAV in only on the braking curve let it drop out
+    # again after each braking step, and switched the command on and off every other step).
+    near, far = SafetyParams(accel_limit=50.0, sensing_radius=20.0), SafetyParams(accel_limit=50.0)
+    assert far.sensing_radius == 100.0 >= far.required_sensing_radius(60.0) > 90.0 > 20.0
+    q = np.array([[[0.0, 0.0], [-50.0, 0.0], [120.0, 0.0]]])  # UAV 1: behind, left behind
+    f = np.zeros((1, 1, 2))
+    push = np.full((1, 1, 2), [1.0, 0.0])  # the controller keeps nudging towards UAV 2
+    closest, switches, infeasible = {}, {}, {}
+    for name, params in (("near", near), ("far", far)):
         filt = SafetyFilter(params, [0], 3)
-        x, v = far.copy(), fast.copy()
-        dmin = np.inf
-        for _ in range(300):
-            out = filt.apply(x, v, f, np.full((1, 1, 2), [50.0, 0.0]))
-            v[0, 0] += P.dt * out.u[0, 0]
-            x = x + P.dt * v
+        x, v = q.copy(), np.array([[[60.0, 0.0], [0.0, 0.0], [0.0, 0.0]]])
+        dmin, active = np.inf, []
+        infeasible[name] = 0
+        for _ in range(400):
+            out = filt.apply(x, v, f, push)
+            v[0, 0] += params.dt * out.u[0, 0]
+            x = x + params.dt * v
             dmin = min(dmin, float(np.linalg.norm(x[0, 0] - x[0, 2])))
+            active.append(bool(out.active[0, 0]))
+            infeasible[name] += int(out.infeasible[0, 0])
         closest[name] = dmin
-    assert closest["lookahead"] >= P.barrier_distance - 1e-9 > P.safety_distance > closest["radius"]
-    for kw, exc in (
-        (dict(lookahead_range=10.0), ValueError),
-        (dict(lookahead_range="1"), TypeError),
-    ):
-        with pytest.raises(exc, match="lookahead_range"):
-            SafetyParams(accel_limit=50.0, **kw)
+        switches[name] = int(np.sum(np.diff(np.array(active, int)) != 0))
+    assert closest["far"] >= far.barrier_distance - 1e-9 > far.safety_distance > closest["near"]
+    assert infeasible["far"] == 0 < infeasible["near"]
+    assert switches["far"] == 1  # on once, then on to the end (the nudge stays cancelled)
 
 
 def _plain_sigma_min(e, v, eps, a, T, c, lam):

@@ -24,8 +24,8 @@ def _case(rng, B, N, D, spread):
     "kw",
     [
         dict(sensing_radius=6.0),
-        dict(sensing_radius=6.0, lookahead_range=25.0),
-        dict(sensing_radius=3.0, lookahead_range=1e5, reaction_time=0.1),  # grid falls back
+        dict(sensing_radius=25.0),
+        dict(sensing_radius=1e5, reaction_time=0.1),  # the grid falls back
         dict(sensing_radius=40.0, decay=1.0),
     ],
 )
@@ -80,7 +80,7 @@ def test_core_with_the_grid_flies_the_all_pairs_trajectories(policy):
         init="random",
         pair_corner=40.0,
         safety_filter="cbf",
-        safety_lookahead_range=60.0,
+        safety_sensing_radius=60.0,
     )
     cores = {
         s: PairFlockCore(make_config("paper", neighbor_search=s, **kw), num_envs=3)

@@ -329,7 +329,9 @@ class Field:
 
     ``aliases`` are old names that still work (a ``DeprecationWarning`` for a user keyword,
     silently when a stored dict is loaded). ``auto`` replaces the default by a value derived
-    from other fields unless the user sets this one.
+    from other fields unless the user sets this one. ``deprecated``, when not empty, says
+    why the field should no longer be set: a user keyword giving it a value other than None
+    gets a ``DeprecationWarning`` with that reason (a stored dict loads silently).
     """
 
     name: str
@@ -339,6 +341,7 @@ class Field:
     doc: str
     aliases: tuple[str, ...] = ()
     auto: Auto | None = None
+    deprecated: str = ""
 
     @property
     def needs(self) -> tuple[str, ...]:

@@ -21,7 +21,7 @@ _ACCEL = OrNone(Real(1e-6, 1e6), "the config's pair_accel_limit, then stored")
 _FRAME_SECTION = Section(
     "pair_frame",
     "Pair-frame learning interface",
-    'frame="pair" (pairflock_env.learning); give them as frame_params={...}.',
+    'interface="pair" (pairflock_env.learning); give them as interface_params={...}.',
     (
         Field(
             "decision_period",

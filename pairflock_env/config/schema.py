@@ -192,6 +192,13 @@ class Schema:
                         DeprecationWarning,
                         stacklevel=external_stacklevel(),
                     )
+            why = self.fields[name].deprecated
+            if warn and why and v is not None:
+                warnings.warn(
+                    f"{self.label} {name!r} is deprecated: {why}",
+                    DeprecationWarning,
+                    stacklevel=external_stacklevel(),
+                )
             out[name] = v
         return out
 

@@ -219,10 +219,13 @@ def _margin_candidate(G, b, idx, s, U, D, W, cand):
     if n_u0 > U * U * (1.0 + _BALL_TOL):
         return False
     rho = np.sqrt(max(U * U - n_u0, 0.0))
-    scale = rho / np.sqrt(n_c) if n_c > 1e-24 else 0.0
+    # with h = D independent differences the affine set is the point u0 (c is rounding noise)
+    scale = rho / np.sqrt(n_c) if h < D and n_c > 1e-24 else 0.0
+    n2 = 0.0
     for k in range(D):
         cand[k] = u0[k] + scale * c[k]
-    return True
+        n2 += cand[k] * cand[k]
+    return n2 <= U * U * (1.0 + _BALL_TOL)  # a candidate outside the ball bounds nothing
 
 
 @njit(cache=True, nogil=True)
@@ -293,6 +296,84 @@ def _solve(un, G, b, K, U, D, W, idx, cand, u_best, out):
     return (STATUS_INFEASIBLE if t < -ftol else STATUS_PROJECTED), t
 
 
+#: more constraints than this are solved on a working set of them (:func:`_solve_ws`)
+WS_DIRECT = 16
+#: the filter's working set stops growing here (the step is then reported infeasible)
+WS_MAX = 32
+#: constraints added to the working set per round (the most violated first)
+WS_ADD = 4
+
+
+@njit(cache=True, nogil=True)
+def _solve_ws(un, G, b, K, U, D, W, idx, cand, u_best, out, Gw, bw, ws, marg, cap):
+    """:func:`_solve` for many constraints, in time bounded by ``cap``. Up to WS_DIRECT
+    constraints it is :func:`_solve`. Beyond, it solves on a working set (first the WS_DIRECT
+    least satisfied by ``un``), checks the answer against all K, adds the WS_ADD most
+    violated and solves again. That is exact: a working set's optimum that satisfies every
+    constraint is the optimum, and a max-margin point whose margin over all K is its set's
+    t* attains t* (t* of a subset is an upper bound). Enumeration costs about K^(D+1), so a
+    working set that would grow beyond ``cap`` ends the search: the last command (within
+    the ball) is returned with STATUS_INFEASIBLE and its margin over all K.
+
+    Gw (cap, 3), bw (cap,), ws (cap,) int and marg (K,) are scratch; b is not changed."""
+    if K <= WS_DIRECT:
+        return _solve(un, G, b, K, U, D, W, idx, cand, u_best, out)
+    n2 = 0.0
+    for k in range(D):
+        n2 += un[k] * un[k]
+    scale = 1.0 + np.sqrt(n2)
+    for k in range(K):
+        scale = max(scale, 1.0 + abs(b[k]))
+    ftol = 1e-9 * scale
+    for k in range(K):
+        acc = -b[k]
+        for j in range(D):
+            acc += G[k, j] * un[j]
+        marg[k] = acc
+    if n2 <= U * U and _margin(G, b, K, D, un) >= 0.0:
+        out[:D] = un[:D]
+        return STATUS_NOMINAL, np.inf
+    kw = _ws_add(marg, K, ws, 0, WS_DIRECT, np.inf)
+    while True:
+        for a in range(kw):
+            bw[a] = b[ws[a]]
+            for j in range(3):
+                Gw[a, j] = G[ws[a], j]
+        status, t = _solve(un, Gw, bw, kw, U, D, W, idx, cand, u_best, out)
+        need = t - ftol if status == STATUS_INFEASIBLE else -ftol
+        for k in range(K):
+            acc = -b[k]
+            for j in range(D):
+                acc += G[k, j] * out[j]
+            marg[k] = acc
+        grown = _ws_add(marg, K, ws, kw, WS_ADD, need)
+        if grown == kw:
+            return status, t
+        if grown > cap:
+            return STATUS_INFEASIBLE, _margin(G, b, K, D, out)
+        kw = grown
+
+
+@njit(cache=True, nogil=True)
+def _ws_add(marg, K, ws, kw, n, below):
+    """Append to ws[:kw] up to n constraints not in it whose margin is < ``below``, the
+    smallest first; returns the new count."""
+    for _ in range(n):
+        best = -1
+        for k in range(K):
+            if marg[k] < below and (best < 0 or marg[k] < marg[best]):
+                seen = False
+                for a in range(kw):
+                    seen |= ws[a] == k
+                if not seen:
+                    best = k
+        if best < 0:
+            break
+        ws[kw] = best
+        kw += 1
+    return kw
+
+
 @njit(cache=True, nogil=True)
 def _sigma_min(e, v, eps, a, T, c, lam, tau=0.0):
     """(H, sigma_min): the barrier and the smallest line-of-sight relative acceleration
@@ -309,25 +390,17 @@ def _sigma_min(e, v, eps, a, T, c, lam, tau=0.0):
     R0 = -(T * s0 + K)
     Ac = a * c * T + a * tau  # a g / T (written so that tau = 0 repeats the plain barrier)
     R = abs(R0)
-    z = R * R / (T * (R + Ac + np.sqrt(Ac * (2.0 * R + Ac))))
+    den = T * (R + Ac + np.sqrt(Ac * (2.0 * R + Ac)))
+    z = R * R / den if den > 0.0 else 0.0  # den = 0 only for R = 0 with Ac underflowed
     s_b = s0 + z if R0 >= 0.0 else s0 - z
     s_a = s0 + min(E, 0.0) / g
     s_e = -(e + T * v) / cT2 + min(e, 0.0) / cT2  # the distance: e(next) >= min(e, 0)
     return H, max(s_a, s_b, s_e)
 
 
-@njit(cache=True, nogil=True)
-def _entry_radius(V, a, Ds, T, c, tau=0.0):
-    """Smallest distance at which a UAV closing at V (m/s, line of sight) is still on the
-    safe side of the barrier with braking a and reaction time tau (radius condition (b),
-    docs/safety.md)."""
-    x = max(0.0, V - (c - 0.5) * a * T)
-    return Ds + V * (T + tau) + x * x / (2.0 * a)
-
-
 @njit(cache=True, nogil=True, _nrt=False, inline="always")  # see _constraints
 def _constrain_one(
-    b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, tau, U, G, rhs, n, K, hmin
+    b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, lam, T, c, tau, U, G, rhs, n, K, hmin
 ):
     """Agent i's constraint against UAV j, appended to G, rhs when it binds; returns (K, hmin,
     ok), ok False for a non-finite pair (the caller then stops)."""
@@ -340,15 +413,7 @@ def _constrain_one(
     if not (np.isfinite(d2) and np.isfinite(w2)):
         return K, hmin, False
     if d2 >= R2 and j != mate:
-        if d2 >= RL2:
-            return K, hmin, True
-        d = np.sqrt(d2)
-        V = 0.0  # closing speed along the line of sight
-        for k in range(D):
-            V -= (q[b, i, k] - q[b, j, k]) * (p[b, i, k] - p[b, j, k]) / d
-        a = 2.0 * alpha if coop[j] else alpha - A_o
-        if d >= _entry_radius(V, a, Ds, T, c, tau):
-            return K, hmin, True  # the radius condition (b) still holds for it
+        return K, hmin, True
     d = np.sqrt(d2)
     for k in range(D):
         n[k] = (q[b, i, k] - q[b, j, k]) / d if d > 0.0 else 0.0
@@ -363,7 +428,8 @@ def _constrain_one(
     eps = 0.0
     if c < 1.0:  # rotation of n within the step (docs/safety.md)
         amax = 2.0 * (fn + U) if coop[j] else fn + U + A_o
-        geo = min(2.0, 2.0 * T * (np.sqrt(w2) + c * T * amax) / (d + min(d, Ds)))
+        den = d + min(d, Ds)  # 0 for coincident UAVs: n may then turn by anything (cap 2)
+        geo = min(2.0, 2.0 * T * (np.sqrt(w2) + c * T * amax) / den) if den > 0.0 else 2.0
         eps = (1.0 - c) * T * amax * geo
     H, smin = _sigma_min(d - Ds, v, eps, a, T, c, lam, tau)
     hmin = min(hmin, H)
@@ -383,17 +449,16 @@ def _constrain_one(
 def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
     """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok).
     UAV ``mate`` (the partner; -1: none) is constrained at any distance, the others within
-    the sensing radius, and beyond it up to the lookahead range (squared: RL2) those that
-    close fast enough for their braking distance to reach them.
+    the sensing radius (squared: R2).
 
     ``grid`` True: the candidates are the UAVs the neighbour grid ``g`` finds within the
-    larger of the two ranges (``within_radius``, in increasing index order, into ``hits``),
+    sensing radius (``within_radius``, in increasing index order, into ``hits``),
     with the partner merged in at its index: the same UAVs in the same order as the scan of
     all N, so the same constraints (the caller uses it only for a swarm the grid holds whose
     state is finite and bounded, where the scan would skip exactly the UAVs out of range)."""
     N, D = q.shape[1], q.shape[2]
     Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
-    RL2, tau = pr[8], pr[9]
+    tau = pr[8]
     K = 0
     hmin = np.inf
     fn = 0.0
@@ -405,7 +470,7 @@ def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
     if grid:
         for k in range(D):
             pt[k] = q[b, i, k]
-        nc = _with_partner(hits, within_radius(q, b, pt, max(R2, RL2), i, g, hits), mate)
+        nc = _with_partner(hits, within_radius(q, b, pt, R2, i, g, hits), mate)
     else:
         nc = N
     for t in range(nc):
@@ -413,8 +478,8 @@ def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
         if j == i:
             continue
         K, hmin, ok = _constrain_one(
-            b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, RL2, lam, T, c, tau, U, G,
-            rhs, n, K, hmin,
+            b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, lam, T, c, tau, U, G, rhs,
+            n, K, hmin,
         )  # fmt: skip
         if not ok:
             return 0, np.nan, False
@@ -470,6 +535,10 @@ def _filter_kernel(
     uin = np.zeros(3)
     uo = np.zeros(3)
     nv = np.zeros(3)
+    Gw = np.zeros((WS_MAX + WS_ADD, 3))
+    bw = np.zeros(WS_MAX + WS_ADD)
+    ws = np.zeros(WS_MAX + WS_ADD, np.int64)
+    marg = np.zeros(max(N, 1))
     for b in range(B):
         grid = use_grid and _grid_usable(q, p, b, g)
         for m in range(M):
@@ -482,7 +551,9 @@ def _filter_kernel(
             violated = True
             if ok:
                 violated = _margin(G, rhs, K, D, uin) < 0.0
-                status, _ = _solve(uin, G, rhs, K, U, D, W, idx, cand, best, uo)
+                status, _ = _solve_ws(
+                    uin, G, rhs, K, U, D, W, idx, cand, best, uo, Gw, bw, ws, marg, WS_MAX
+                )
             else:  # non-finite state (a diverged swarm): pass the command through
                 status = STATUS_INFEASIBLE
                 uo[:D] = uin[:D]

@@ -90,10 +90,8 @@ class SafetyFilter:
     Every UAV listed in ``agents`` runs this filter, so against each other (partners
     included) they split the constraint in halves; the other UAVs are assumed to accelerate
     towards an agent at most ``other_accel``. Agent i uses only the relative positions and
-    velocities of its partner, of the UAVs closer than ``sensing_radius`` and of those
-    closer than ``lookahead_range`` that close on it too fast for the radius condition
-    (:meth:`SafetyParams.required_sensing_radius`), its own flocking command and its own
-    bound.
+    velocities of its partner and of the UAVs closer than ``sensing_radius``, its own
+    flocking command and its own bound.
     """
 
     def __init__(
@@ -129,7 +127,6 @@ class SafetyFilter:
                 P.dt,
                 P.position_gain,
                 P.accel_limit,
-                P.lookahead_range**2,
                 P.reaction_time,
             ]
         )

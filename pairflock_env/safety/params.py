@@ -8,8 +8,7 @@ import numbers
 from typing import Any
 
 from ..config.sections import safety as _section
-from ..config.sections.safety import BRAKE_SHARE, DECAY, OTHER_SHARE
-from ._kernels import _entry_radius
+from ..config.sections.safety import BRAKE_SHARE, DECAY, OTHER_SHARE, SENSING_RADIUS
 
 __all__ = ["INTEGRATORS", "SafetyParams"]
 
@@ -52,15 +51,11 @@ class SafetyParams:
     """A_o (m/s^2): assumed bound on an unpaired UAV's acceleration towards the agent
     (n . a_j <= A_o; for ``integrator="exact"`` or ``substeps > 1`` on its norm);
     0 <= A_o < alpha. None: 0.4 U."""
-    sensing_radius: float = 20.0
+    sensing_radius: float = SENSING_RADIUS
     """R_s (m): an agent constrains itself against the UAVs closer than this (> D_s +
-    delta), and
-    against its partner (``SafetyFilter(partners=...)``) at any distance."""
-    lookahead_range: float | None = None
-    """R_L (m): beyond R_s and up to this distance an agent also constrains itself against
-    every UAV that closes on it so fast that the radius condition (b) of docs/safety.md
-    fails at its distance: D_s + delta + V T + max(0, V - beta)^2 / (2 alpha_ij) > d (V: the
-    closing speed along the line of sight). None: R_s (no lookahead); >= R_s."""
+    delta), and against its partner (``SafetyFilter(partners=...)``) at any distance. A UAV
+    closing at V is first sensed on the safe side if R_s >= :meth:`required_sensing_radius`
+    (V), the radius condition (b) of docs/safety.md."""
     reaction_time: float = 0.0
     """tau (s): the barrier counts on braking only after coasting tau at the current range
     rate, E = d - D_s - delta + tau d' (a reaction-time braking distance, for a vehicle that
@@ -111,14 +106,6 @@ class SafetyParams:
                 f"safety_distance + margin = {self.safety_distance + m:g}"
             )
         put(self, "sensing_radius", r)
-        reach = self.lookahead_range
-        reach = r if reach is None else _real("lookahead_range", reach)
-        if reach < r:
-            raise ValueError(
-                f"lookahead_range={self.lookahead_range!r} is invalid: must be >= "
-                f"sensing_radius={r:g} (or None)"
-            )
-        put(self, "lookahead_range", reach)
         tau = _real("reaction_time", self.reaction_time)
         if tau < 0:
             raise ValueError(f"reaction_time={self.reaction_time!r} is invalid: must be >= 0")
@@ -143,8 +130,9 @@ class SafetyParams:
         """Parameters for an env config: ``accel_limit = pair_accel_limit``, the config's
         ``dt``, ``substeps``, ``integrator`` and its ``safety_*`` fields (section ``safety``:
         ``safety_distance``, ``safety_margin``, ``safety_brake_accel``,
-        ``safety_other_accel``, ``safety_sensing_radius``, ``safety_lookahead_range``,
-        ``safety_reaction_time``, ``safety_decay``). The unset (None) ones follow the
+        ``safety_other_accel``, ``safety_sensing_radius`` (or the deprecated
+        ``safety_lookahead_range`` where that is larger), ``safety_reaction_time``,
+        ``safety_decay``). The unset (None) ones follow the
         vehicle: the brake and other accelerations, the reaction time and the rate take the
         section's defaults for ``config.dynamics`` (:func:`~pairflock_env.config.sections.
         safety.brake_accel` and its siblings; on the quadrotor they depend on
@@ -159,8 +147,7 @@ class SafetyParams:
             margin=config.safety_margin,
             brake_accel=_section.brake_accel(config),
             other_accel=_section.other_accel(config),
-            sensing_radius=config.safety_sensing_radius,
-            lookahead_range=config.safety_lookahead_range,
+            sensing_radius=_section.sensing_radius(config),
             reaction_time=_section.reaction_time(config),
             decay=_section.decay(config),
         )
@@ -194,8 +181,8 @@ class SafetyParams:
         first sensed on the safe side of the barrier: D_s + delta + V (T + tau) +
         max(0, V - beta)^2 / (2 alpha_ij), beta = (c - 1/2) alpha_ij T (docs/safety.md).
         It concerns the UAVs other than the agent's partner, which the filter senses at any
-        distance; the filter uses the same formula for ``lookahead_range``."""
+        distance."""
         v = _real("closing_speed", closing_speed)
         a = self.barrier_accel(cooperative)
-        d = self.barrier_distance
-        return float(_entry_radius(v, a, d, self.dt, self.position_gain, self.reaction_time))
+        x = max(0.0, v - (self.position_gain - 0.5) * a * self.dt)
+        return self.barrier_distance + v * (self.dt + self.reaction_time) + x * x / (2.0 * a)

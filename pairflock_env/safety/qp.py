@@ -5,7 +5,10 @@ The filter's per-agent problem is the small QCQP
     minimise ||u - u_nom||^2   subject to   g_k . u >= b_k  (k = 1..K),   ||u|| <= U
 
 with unit normals g_k. It is solved exactly by enumerating active sets, which is cheap because
-dim <= 3 and the filter passes only the few constraints that the bound does not already imply.
+dim <= 3 and the filter passes only the constraints that the bound does not already imply.
+With more than 16 of them it is solved on a working set: the 16 least satisfied, then the
+most violated added until the answer satisfies all (exact; the filter stops at 32 and
+reports such a step infeasible, so that a dense crowd cannot make a step take minutes).
 
 *Why enumeration is exact.* The objective is strictly convex, so the optimum u* is unique.
 When the feasible set has an interior point (Slater), KKT multipliers exist at u*; by
@@ -46,7 +49,7 @@ from ._kernels import (
     STATUS_NOMINAL,
     STATUS_PROJECTED,
     _max_margin,
-    _solve,
+    _solve_ws,
 )
 
 __all__ = ["STATUS_INFEASIBLE", "STATUS_NOMINAL", "STATUS_PROJECTED", "max_margin", "project"]
@@ -96,9 +99,12 @@ def project(u_nom, G, b, U):
     D = G.shape[1]
     un = np.zeros(3)
     un[:D] = u_nom
-    Gp = np.zeros((max(G.shape[0], 1), 3))
-    Gp[: G.shape[0], :D] = G
-    status, t = _solve(un, Gp, b.copy(), G.shape[0], U, D, W, idx, cand, best, out)
+    K = G.shape[0]
+    Gp = np.zeros((max(K, 1), 3))
+    Gp[:K, :D] = G
+    n = K + 4  # working-set scratch, uncapped: exact for any K (docs in _kernels._solve_ws)
+    Gw, bw, ws, marg = np.zeros((n, 3)), np.zeros(n), np.zeros(n, np.int64), np.zeros(max(K, 1))
+    status, t = _solve_ws(un, Gp, b.copy(), K, U, D, W, idx, cand, best, out, Gw, bw, ws, marg, K)
     return out[:D].copy(), int(status), float(t)
 
 

@@ -21,11 +21,13 @@ __all__ = [
     "QUAD_REACTION_CYCLES",
     "RULES",
     "SECTIONS",
+    "SENSING_RADIUS",
     "brake_accel",
     "decay",
     "other_accel",
     "quad_accel_bound",
     "reaction_time",
+    "sensing_radius",
 ]
 
 #: share of ``pair_accel_limit`` a paired UAV counts on for braking when unset
@@ -35,6 +37,10 @@ BRAKE_SHARE = 0.8
 OTHER_SHARE = 0.4
 #: barrier rate lambda when unset (particle model)
 DECAY = 0.5
+#: default sensing radius R_s (m): the smallest of 20-120 m with which no filtered tuning run
+#: (seeds 2000-2019: the safe generalist at pair_accel_limit 50, sliding mode, the
+#: proportional method and the generalist at 1000) had an infeasible step (docs/safety.md)
+SENSING_RADIUS = 100.0
 
 # Quadrotor defaults (``dynamics="quadrotor"``, docs/safety.md "Quadrotors"): the vehicle
 # realises at most ``quad_accel_bound`` and realises it late (its attitude loop), so the unset
@@ -47,6 +53,8 @@ QUAD_OTHER_SHARE = 1.0 / 3.0
 QUAD_REACTION_CYCLES = 1.5
 #: barrier rate lambda when unset on the quadrotor
 QUAD_DECAY = 0.1
+#: largest reaction time tau (s) the field accepts; the quadrotor's derived one must fit too
+MAX_REACTION_TIME = 10.0
 
 
 def _quadrotor(v: Any) -> bool:
@@ -85,6 +93,14 @@ def reaction_time(v: Any) -> float:
     if v.safety_reaction_time is not None:
         return v.safety_reaction_time
     return QUAD_REACTION_CYCLES / v.quad_attitude_freq if _quadrotor(v) else 0.0
+
+
+def sensing_radius(v: Any) -> float:
+    """R_s (m): ``safety_sensing_radius``, or the deprecated ``safety_lookahead_range`` where
+    that is set and larger."""
+    reach = getattr(v, "safety_lookahead_range", None)
+    r = v.safety_sensing_radius
+    return r if reach is None else max(r, reach)
 
 
 def decay(v: Any) -> float:
@@ -160,23 +176,26 @@ SAFETY = Section(
         Field(
             "safety_sensing_radius",
             Real(1e-3, MAX_DISTANCE),
-            20.0,
+            SENSING_RADIUS,
             "m",
             "A paired UAV constrains its command against the UAVs closer than this (and "
-            "against its partner at any distance); above safety_distance + safety_margin.",
+            "against its partner at any distance); above safety_distance + safety_margin. "
+            "A UAV closing at V m/s must first be sensed on the safe side, roughly "
+            "safety_distance + V^2 / (2 (brake - other accel)) away (docs/safety.md).",
         ),
         Field(
             "safety_lookahead_range",
             OrNone(Real(1e-3, MAX_DISTANCE), "safety_sensing_radius"),
             None,
             "m",
-            "Up to this distance a paired UAV also constrains its command against every UAV "
-            "beyond safety_sensing_radius that closes on it faster than the barrier can "
-            "brake for from where it is (docs/safety.md); None: no lookahead.",
+            "Deprecated: the filter senses out to the larger of this and "
+            "safety_sensing_radius; set safety_sensing_radius instead.",
+            deprecated="it now only extends safety_sensing_radius to its value (its entry "
+            "rule made the filtered command chatter); set safety_sensing_radius instead",
         ),
         Field(
             "safety_reaction_time",
-            OrNone(Real(0.0, 10.0), "0; quadrotor: 1.5 / quad_attitude_freq"),
+            OrNone(Real(0.0, MAX_REACTION_TIME), "0; quadrotor: 1.5 / quad_attitude_freq"),
             None,
             "s",
             "Reaction time tau of the barrier: a paired UAV counts on braking only after "
@@ -223,10 +242,16 @@ def _radius_beyond_distance(v: Any) -> str | None:
     return None
 
 
-def _lookahead_beyond_radius(v: Any) -> str | None:
-    reach = v.safety_lookahead_range
-    if reach is not None and reach < v.safety_sensing_radius:
-        return f"must be >= safety_sensing_radius ({v.safety_sensing_radius:g} m) or None"
+def _derived_reaction_time_in_range(v: Any) -> str | None:
+    if v.safety_filter != "cbf" or v.safety_reaction_time is not None or not _quadrotor(v):
+        return None
+    tau = reaction_time(v)
+    if not tau <= MAX_REACTION_TIME:
+        return (
+            f"makes the unset safety_reaction_time {QUAD_REACTION_CYCLES:g} / "
+            f"quad_attitude_freq = {tau:g} s, above the {MAX_REACTION_TIME:g} s it may be; "
+            "set safety_reaction_time"
+        )
     return None
 
 
@@ -255,8 +280,8 @@ RULES = (
         "safety_sensing_radius > safety_distance + safety_margin",
     ),
     Rule(
-        ("safety_lookahead_range", "safety_sensing_radius"),
-        _lookahead_beyond_radius,
-        "safety_lookahead_range >= safety_sensing_radius (or None)",
+        ("quad_attitude_freq", "safety_reaction_time", "safety_filter", "dynamics"),
+        _derived_reaction_time_in_range,
+        "the quadrotor's derived safety_reaction_time (1.5 / quad_attitude_freq) <= 10 s",
     ),
 )
