@@ -239,7 +239,12 @@ def vecenv(repeats: int = 5, steps: int = 200) -> None:
     from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
 
     kw = dict(n_uavs=20, pair_accel_limit=50.0, obs_neighbors=12, num_swarms=32)
-    envs = {m: PairFlockSB3VecEnv(safety_filter=m, seed=0, **kw) for m in ("none", "cbf")}
+    settings = {
+        "none": dict(safety_filter="none"),
+        "cbf": dict(safety_filter="cbf"),  # the default 100 m sensing radius
+        "cbf, 20 m radius": dict(safety_filter="cbf", safety_sensing_radius=20.0),
+    }
+    envs = {m: PairFlockSB3VecEnv(seed=0, **s, **kw) for m, s in settings.items()}
     rng = np.random.default_rng(0)
     rates: dict[str, list[float]] = {m: [] for m in envs}
     for env in envs.values():
