@@ -315,7 +315,8 @@ def _solve_ws(un, G, b, K, U, D, W, idx, cand, u_best, out, Gw, bw, ws, marg, ca
     working set that would grow beyond ``cap`` ends the search: the last command (within
     the ball) is returned with STATUS_INFEASIBLE and its margin over all K.
 
-    Gw (cap, 3), bw (cap,), ws (cap,) int and marg (K,) are scratch; b is not changed."""
+    Gw (cap + WS_ADD, 3), bw, ws (int) (cap + WS_ADD,) and marg (K,) are scratch; b is not
+    changed."""
     if K <= WS_DIRECT:
         return _solve(un, G, b, K, U, D, W, idx, cand, u_best, out)
     n2 = 0.0
