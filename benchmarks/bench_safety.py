@@ -90,7 +90,9 @@ def states(N: int, B: int, limit: float, params: dict):
 
 
 def assumptions(N: int, seeds: int = 8, radius: float = 20.0) -> None:
-    """Percentiles of the quantities behind the filter's assumptions (module docstring)."""
+    """Percentiles of the quantities behind the filter's assumptions (module docstring),
+    for the UAVs within ``radius`` of a paired UAV (20 m: the filter's sensing radius when
+    docs/safety.md quoted them; the default is 100 m now)."""
     cfg = make_config("paper", n_uavs=N)
     core = PairFlockCore(cfg, num_envs=seeds)
     res = core.reset(seed=list(range(seeds)))

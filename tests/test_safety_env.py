@@ -132,10 +132,10 @@ def test_cross_field_rules_are_checked_at_construction():
         make_config("paper", safety_sensing_radius=2.0, safety_margin=1.5)
     # the deprecated lookahead range only extends the sensing radius, with a warning
     for reach, radius in ((10.0, 100.0), (150.0, 150.0)):
-        with pytest.warns(DeprecationWarning, match="safety_lookahead_range.*safety_sensing_r"):
+        with pytest.warns(FutureWarning, match="safety_lookahead_range.*safety_sensing_r"):
             cfg = make_config("paper", safety_lookahead_range=reach, **CBF)
         assert SafetyParams.from_config(cfg).sensing_radius == radius
-    with pytest.warns(DeprecationWarning, match="safety_lookahead_range"):
+    with pytest.warns(FutureWarning, match="safety_lookahead_range"):
         cfg.replace(safety_lookahead_range=120.0)
     with warnings.catch_warnings():  # a stored config, or None, loads silently
         warnings.simplefilter("error")

@@ -229,6 +229,53 @@ def test_the_working_set_gives_the_full_enumerations_answer():
     assert statuses == {STATUS_PROJECTED, STATUS_INFEASIBLE}
 
 
+def _ws_call(un, G, b, U, cap):
+    from pairflock_env.safety._kernels import _solve_ws
+
+    K, D = G.shape
+    Gp, up = np.zeros((K, 3)), np.zeros(3)
+    Gp[:, :D], up[:D] = G, un
+    out = np.zeros(3)
+    work = [np.zeros((cap + 4, 3)), np.zeros(cap + 4), np.zeros(cap + 4, np.int64), np.zeros(K)]
+    scratch = [np.zeros((4, 4, 4)), np.zeros(5, np.int64), np.zeros(3), np.zeros(3)]
+    status, t = _solve_ws(up, Gp, b, K, U, D, *scratch, out, *work, cap)
+    return out[:D], status, t
+
+
+def test_a_capped_working_set_reports_the_step_infeasible_with_its_true_margin():
+    # the filter stops the working set at WS_MAX: such a step is flagged (no guarantee), its
+    # command stays in the ball and its margin is the one over all constraints
+    from pairflock_env.safety._kernels import WS_DIRECT
+
+    rng = np.random.default_rng(11)
+    capped = 0
+    for _ in range(200):
+        D, K = 2, 40
+        G = rng.normal(size=(K, D))
+        G /= np.linalg.norm(G, axis=1, keepdims=True)
+        b = G @ (rng.normal(size=D) * 0.3) - rng.uniform(0, 2, K)  # feasible
+        un, U = rng.normal(size=D) * 5, 3.0
+        u_full, s_full, _ = _ws_call(un, G, b.copy(), U, K)
+        b0 = b.copy()
+        u, status, t = _ws_call(un, G, b, U, WS_DIRECT)  # no room for a second round
+        assert np.array_equal(b, b0) and np.linalg.norm(u) <= U * (1 + 1e-12)
+        if status != s_full or not np.array_equal(u, u_full):  # it needed more rounds
+            capped += 1
+            assert s_full == STATUS_PROJECTED and status == STATUS_INFEASIBLE
+            assert t == pytest.approx((G @ u - b).min(), abs=1e-12) and t < 0
+    assert capped >= 5
+
+
+def test_the_working_set_keeps_the_whole_problems_tolerance():
+    # x >= 1 and x <= 1 - 1e-5 conflict by less than the tolerance set by a far constraint
+    # (b = -9e5): the full problem counts them as met, and so must every working set
+    G = np.array([[1.0, 0.0], [-1.0, 0.0]] + [[0.0, 1.0]] * 15 + [[0.0, -1.0]])
+    b = np.array([1.0, -(1.0 - 1e-5)] + [-2.0] * 15 + [-9e5])
+    u, status, t = project([0.0, 0.0], G, b, 10.0)
+    assert status == STATUS_PROJECTED and t == 0.0
+    np.testing.assert_allclose(u, [1.0, 0.0], atol=1e-9)
+
+
 def test_the_max_margin_point_stays_in_the_ball():
     # nearly parallel normals with full-rank differences: the candidate of three constraints
     # in 2-D is a single point, and rounding once scaled a zero direction out of the ball

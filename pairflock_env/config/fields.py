@@ -331,7 +331,7 @@ class Field:
     silently when a stored dict is loaded). ``auto`` replaces the default by a value derived
     from other fields unless the user sets this one. ``deprecated``, when not empty, says
     why the field should no longer be set: a user keyword giving it a value other than None
-    gets a ``DeprecationWarning`` with that reason (a stored dict loads silently).
+    gets a ``FutureWarning`` with that reason (a stored dict loads silently).
     """
 
     name: str

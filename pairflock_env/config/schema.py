@@ -194,9 +194,11 @@ class Schema:
                     )
             why = self.fields[name].deprecated
             if warn and why and v is not None:
+                # a FutureWarning: its meaning changed, and Python shows it to the users of
+                # the command lines too (a DeprecationWarning from library code it hides)
                 warnings.warn(
                     f"{self.label} {name!r} is deprecated: {why}",
-                    DeprecationWarning,
+                    FutureWarning,
                     stacklevel=external_stacklevel(),
                 )
             out[name] = v

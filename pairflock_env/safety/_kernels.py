@@ -21,6 +21,7 @@ STATUS_NOMINAL = 0
 #: the nominal command was projected onto the (non-empty) feasible set
 STATUS_PROJECTED = 1
 #: no command within the bound satisfies every constraint: the max-margin fallback was used
+#: (or, in the filter, the working set of a crowd reached WS_MAX constraints: see _solve_ws)
 STATUS_INFEASIBLE = 2
 
 _RANK_TOL = 1e-10
@@ -268,18 +269,18 @@ def _max_margin(G, b, K, U, D, W, idx, cand, out):
 
 
 @njit(cache=True, nogil=True)
-def _solve(un, G, b, K, U, D, W, idx, cand, u_best, out):
+def _solve(un, G, b, K, U, D, W, idx, cand, u_best, out, ftol=-1.0):
     """The filter's QCQP for one agent; returns (status, t*) and writes the command to out.
 
     W: scratch (4, 4, 4); idx: (5,) int; cand, u_best: (3,). b is shifted in place by t*
-    when the problem is infeasible (the caller's constraint buffer)."""
+    when the problem is infeasible (the caller's constraint buffer). ``ftol`` < 0: the
+    tolerance of these constraints (module docstring of :mod:`.qp`); :func:`_solve_ws`
+    passes the one of the whole problem."""
     n2 = 0.0
     for k in range(D):
         n2 += un[k] * un[k]
-    scale = 1.0 + np.sqrt(n2)
-    for k in range(K):
-        scale = max(scale, 1.0 + abs(b[k]))
-    ftol = 1e-9 * scale
+    if ftol < 0.0:
+        ftol = _ftol(un, b, K, D)
     if n2 <= U * U and _margin(G, b, K, D, un) >= 0.0:
         out[:D] = un[:D]
         return STATUS_NOMINAL, np.inf
@@ -294,6 +295,18 @@ def _solve(un, G, b, K, U, D, W, idx, cand, u_best, out):
     if not _project(un, G, b, K, U, D, ftol, W, idx, cand, out):
         out[:D] = u_best[:D]  # the max-margin set is this one point (up to ftol)
     return (STATUS_INFEASIBLE if t < -ftol else STATUS_PROJECTED), t
+
+
+@njit(cache=True, nogil=True)
+def _ftol(un, b, K, D):
+    """Constraint tolerance 1e-9 (1 + max(||un||, max_k |b_k|)) (m/s^2)."""
+    n2 = 0.0
+    for k in range(D):
+        n2 += un[k] * un[k]
+    scale = 1.0 + np.sqrt(n2)
+    for k in range(K):
+        scale = max(scale, 1.0 + abs(b[k]))
+    return 1e-9 * scale
 
 
 #: more constraints than this are solved on a working set of them (:func:`_solve_ws`)
@@ -322,10 +335,7 @@ def _solve_ws(un, G, b, K, U, D, W, idx, cand, u_best, out, Gw, bw, ws, marg, ca
     n2 = 0.0
     for k in range(D):
         n2 += un[k] * un[k]
-    scale = 1.0 + np.sqrt(n2)
-    for k in range(K):
-        scale = max(scale, 1.0 + abs(b[k]))
-    ftol = 1e-9 * scale
+    ftol = _ftol(un, b, K, D)  # the whole problem's, for every subset too
     for k in range(K):
         acc = -b[k]
         for j in range(D):
@@ -340,7 +350,7 @@ def _solve_ws(un, G, b, K, U, D, W, idx, cand, u_best, out, Gw, bw, ws, marg, ca
             bw[a] = b[ws[a]]
             for j in range(3):
                 Gw[a, j] = G[ws[a], j]
-        status, t = _solve(un, Gw, bw, kw, U, D, W, idx, cand, u_best, out)
+        status, t = _solve(un, Gw, bw, kw, U, D, W, idx, cand, u_best, out, ftol)
         need = t - ftol if status == STATUS_INFEASIBLE else -ftol
         for k in range(K):
             acc = -b[k]
