@@ -203,32 +203,6 @@ def test_many_constraints_are_solved_on_a_working_set_exactly():
     assert seen[STATUS_PROJECTED] >= 10 and seen[STATUS_INFEASIBLE] >= 3
 
 
-def test_the_working_set_gives_the_full_enumerations_answer():
-    # the working set against the enumeration over all K (what the filter ran before it)
-    from pairflock_env.safety._kernels import _solve, _solve_ws
-
-    rng = np.random.default_rng(10)
-    statuses = set()
-    for _ in range(300):
-        D, K = int(rng.integers(2, 4)), int(rng.integers(17, 31))
-        G = np.zeros((K, 3))
-        G[:, :D] = rng.normal(size=(K, D))
-        G /= np.linalg.norm(G, axis=1, keepdims=True)
-        un = np.zeros(3)
-        un[:D] = rng.normal(size=D) * 5
-        U = rng.uniform(0.5, 5.0)
-        b = G[:, :D] @ (rng.normal(size=D) * 0.3) - rng.uniform(0, 2, K) + rng.choice([0, 0.8])
-        scratch = [np.zeros((4, 4, 4)), np.zeros(5, np.int64), np.zeros(3), np.zeros(3)]
-        full, ws = np.zeros(3), np.zeros(3)
-        s1, t1 = _solve(un, G, b.copy(), K, U, D, *scratch, full)
-        work = [np.zeros((K + 4, 3)), np.zeros(K + 4), np.zeros(K + 4, np.int64), np.zeros(K)]
-        s2, t2 = _solve_ws(un, G, b.copy(), K, U, D, *scratch, ws, *work, K)
-        assert s1 == s2 and (t1 == t2 or abs(t1 - t2) <= 1e-9)
-        np.testing.assert_allclose(ws, full, atol=1e-9, rtol=0)
-        statuses.add(s1)
-    assert statuses == {STATUS_PROJECTED, STATUS_INFEASIBLE}
-
-
 def _ws_call(un, G, b, U, cap):
     from pairflock_env.safety._kernels import _solve_ws
 
@@ -240,6 +214,29 @@ def _ws_call(un, G, b, U, cap):
     scratch = [np.zeros((4, 4, 4)), np.zeros(5, np.int64), np.zeros(3), np.zeros(3)]
     status, t = _solve_ws(up, Gp, b, K, U, D, *scratch, out, *work, cap)
     return out[:D], status, t
+
+
+def test_the_working_set_gives_the_full_enumerations_answer():
+    # the working set against the enumeration over all K (what the filter ran before it)
+    from pairflock_env.safety._kernels import _solve
+
+    rng = np.random.default_rng(10)
+    statuses = set()
+    for _ in range(300):
+        D, K = int(rng.integers(2, 4)), int(rng.integers(17, 31))
+        G = rng.normal(size=(K, D))
+        G /= np.linalg.norm(G, axis=1, keepdims=True)
+        un, U = rng.normal(size=D) * 5, rng.uniform(0.5, 5.0)
+        b = G @ (rng.normal(size=D) * 0.3) - rng.uniform(0, 2, K) + rng.choice([0, 0.8])
+        Gp, up, full = np.zeros((K, 3)), np.zeros(3), np.zeros(3)
+        Gp[:, :D], up[:D] = G, un
+        scratch = [np.zeros((4, 4, 4)), np.zeros(5, np.int64), np.zeros(3), np.zeros(3)]
+        s1, t1 = _solve(up, Gp, b.copy(), K, U, D, *scratch, full)
+        ws, s2, t2 = _ws_call(un, G, b.copy(), U, K)
+        assert s1 == s2 and (t1 == t2 or abs(t1 - t2) <= 1e-9)
+        np.testing.assert_allclose(ws, full[:D], atol=1e-9, rtol=0)
+        statuses.add(s1)
+    assert statuses == {STATUS_PROJECTED, STATUS_INFEASIBLE}
 
 
 def test_a_capped_working_set_reports_the_step_infeasible_with_its_true_margin():

@@ -336,12 +336,14 @@ def _solve_ws(un, G, b, K, U, D, W, idx, cand, u_best, out, Gw, bw, ws, marg, ca
     for k in range(D):
         n2 += un[k] * un[k]
     ftol = _ftol(un, b, K, D)  # the whole problem's, for every subset too
+    low = np.inf
     for k in range(K):
         acc = -b[k]
         for j in range(D):
             acc += G[k, j] * un[j]
         marg[k] = acc
-    if n2 <= U * U and _margin(G, b, K, D, un) >= 0.0:
+        low = min(low, acc)
+    if n2 <= U * U and low >= 0.0:
         out[:D] = un[:D]
         return STATUS_NOMINAL, np.inf
     kw = _ws_add(marg, K, ws, 0, WS_DIRECT, np.inf)

@@ -98,8 +98,7 @@ def reaction_time(v: Any) -> float:
 def sensing_radius(v: Any) -> float:
     """R_s (m): ``safety_sensing_radius``, or the deprecated ``safety_lookahead_range`` where
     that is set and larger."""
-    reach = getattr(v, "safety_lookahead_range", None)
-    r = v.safety_sensing_radius
+    r, reach = v.safety_sensing_radius, v.safety_lookahead_range
     return r if reach is None else max(r, reach)
 
 
