@@ -24,7 +24,7 @@ from pairflock_env.safety import (
     project,
     safety_filter,
 )
-from pairflock_env.safety._kernels import _sigma_min
+from pairflock_env.safety._kernels import _far, _far_terms, _sigma_min
 
 # ----------------------------------------------------------------------------- references
 
@@ -500,6 +500,91 @@ def test_violated_assumption_is_reported():
 
 
 # ----------------------------------------------------------------------------- batching, edges
+
+
+def _random_params(rng):
+    """SafetyParams over the valid ranges: substeps, the exact integrator, a reaction time."""
+    U = float(rng.uniform(5, 1000))
+    alpha = U * float(rng.uniform(0.05, 1))
+    return SafetyParams(
+        accel_limit=U,
+        brake_accel=alpha,
+        other_accel=alpha * float(rng.uniform(0, 0.99)),
+        dt=float(rng.choice([0.001, 0.01, 0.05])),
+        substeps=int(rng.choice([1, 2, 5])),
+        integrator=str(rng.choice(["semi_implicit", "exact"])),
+        reaction_time=float(rng.choice([0.0, rng.uniform(0, 0.5)])),
+        decay=float(rng.uniform(0.02, 1)),
+        margin=float(rng.choice([0.0, 0.01])),
+        sensing_radius=1e6,
+    )
+
+
+def test_a_skipped_far_uav_has_a_constraint_the_bound_implies():
+    """_far's claim (docs/safety.md, "Skipping far UAVs"): a UAV it skips would get a
+    right-hand side <= -U (sigma_min + A_o - n . f_i for an unpaired UAV, sigma_min / 2 -
+    n . f_i for a filtered one) for every range rate |v| <= ||w||,
+    every rotation term eps within its bound and every direction of f_i, and its
+    H >= T S / lambda > 0."""
+    rng = np.random.default_rng(21)
+    skipped = 0
+    for _ in range(4000):
+        P = _random_params(rng)
+        pr = SafetyFilter(P, [0], 2)._pr
+        fn = float(rng.choice([0.0, rng.uniform(0, 3 * P.accel_limit)]))
+        coop = bool(rng.integers(2))  # against an unpaired or a filtered UAV
+        far = _far_terms(pr, fn, coop)
+        W = float(rng.choice([0.0, rng.exponential(20.0)]))
+        Db = P.barrier_distance
+        e = float(rng.exponential(rng.choice([0.1, 5.0, 100.0])))
+        if rng.random() < 0.3 and _far((Db + 1e7) ** 2, W * W, far):  # the threshold itself
+            lo, e = 0.0, 1e7
+            for _ in range(60):
+                mid = 0.5 * (lo + e)
+                lo, e = (lo, mid) if _far((Db + mid) ** 2, W * W, far) else (mid, e)
+        d = Db + e
+        if not _far(d * d, W * W, far):
+            continue
+        skipped += 1
+        a, c, T, U = P.barrier_accel(coop), P.position_gain, P.dt, P.accel_limit
+        A_o = P.other_accel
+        S = 2 * (fn + U) if coop else fn + U + A_o  # dropped: sigma_min <= -S
+        for v in (-W, rng.uniform(-W, W), W):
+            for eps in (0.0, 2 * (1 - c) * T * S):
+                H, smin = _sigma_min(e, v, eps, a, T, c, P.decay, P.reaction_time)
+                assert smin <= -S, (P, coop, fn, W, e, v, eps, smin)
+                H_low = T * S / P.decay * (1 - 1e-9)
+                assert H_low <= H, (P, fn, W, e, v, H)
+    assert skipped > 500
+
+
+def test_skipping_far_uavs_changes_no_command():
+    """The filter with the skip and without it (the kernel's switch, pr[9]) gives the same
+    commands and flags bit for bit; only ``barrier`` omits skipped UAVs, whose H is > 0."""
+    rng = np.random.default_rng(22)
+    changed = 0
+    for _ in range(150):
+        P = dataclasses.replace(_random_params(rng), sensing_radius=float(rng.uniform(3, 200)))
+        B, N, D = 3, int(rng.integers(2, 30)), int(rng.integers(2, 4))
+        M = min(N, int(rng.integers(1, 4)))
+        ag = rng.choice(N, M, replace=False)
+        mates = np.full(M, -1)
+        if M >= 2:
+            mates[:2] = ag[1], ag[0]
+        q = rng.normal(0, rng.uniform(1, 60), (B, N, D))
+        p = rng.normal(0, rng.uniform(0.1, 40), (B, N, D))
+        f = rng.normal(0, 1, (B, M, D)) * rng.uniform(0, P.accel_limit)
+        un = rng.normal(0, P.accel_limit, (B, M, D))
+        on = SafetyFilter(P, ag, N, mates)
+        off = SafetyFilter(P, ag, N, mates)
+        off._pr[9] = 0.0
+        a, b = on.apply(q, p, f, un), off.apply(q, p, f, un)
+        for x, y in zip(a.arrays()[:4], b.arrays()[:4], strict=True):
+            assert np.array_equal(x, y)
+        diff = a.barrier != b.barrier
+        assert (a.barrier[diff] > b.barrier[diff]).all() and (b.barrier[diff] > 0).all()
+        changed += diff.sum()
+    assert changed > 50
 
 
 def _random_state(rng, B, N, D):

@@ -28,7 +28,16 @@ _RANK_TOL = 1e-10
 _BALL_TOL = 1e-12
 
 
-@njit(cache=True, nogil=True)
+# The solver is compiled without numba's reference counting (it never allocates: the
+# caller passes all scratch), for the reason given at _constraints.
+@njit(cache=True, nogil=True, _nrt=False, inline="always")
+def _put(dst, src, D):
+    """dst[:D] = src[:D] (a loop: a slice assignment would need numba's runtime)."""
+    for k in range(D):
+        dst[k] = src[k]
+
+
+@njit(cache=True, nogil=True, _nrt=False)
 def _factor(A, s, D, L):
     """Cholesky factor of the Gram matrix of the first s rows of A into L; False if the rows
     are (numerically) linearly dependent."""
@@ -53,7 +62,7 @@ def _factor(A, s, D, L):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _min_norm(A, s, D, L, r, y, z):
     """z = A^T (A A^T)^-1 r (first s rows of A, factor L from _factor); y is scratch."""
     for a in range(s):
@@ -73,7 +82,7 @@ def _min_norm(A, s, D, L, r, y, z):
         z[k] = acc
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _next_comb(idx, s, K):
     """Advance idx[:s] to the next s-subset of range(K) in lexicographic order."""
     a = s - 1
@@ -87,7 +96,7 @@ def _next_comb(idx, s, K):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _margin(G, b, K, D, u):
     """Smallest constraint margin min_k (g_k . u - b_k); +inf when K = 0."""
     m = np.inf
@@ -100,7 +109,7 @@ def _margin(G, b, K, D, u):
     return m
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _feasible(G, b, K, D, u, ftol, hint):
     """Whether every margin of u is >= -ftol; checks constraint hint[0] first and stores
     the first violated one there (a candidate usually fails where the previous one did)."""
@@ -118,7 +127,7 @@ def _feasible(G, b, K, D, u, ftol, hint):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _projection_candidate(un, G, b, idx, s, U, D, W, cand):
     """Candidate of active set idx[:s] (module docstring) into cand. Returns 0 (none), 1 (a
     candidate) or 2 (a candidate whose KKT multipliers are all >= 0: if it is feasible, it
@@ -145,14 +154,14 @@ def _projection_candidate(un, G, b, idx, s, U, D, W, cand):
     U2 = U * U
     mu = 0.0
     if n_pi <= U2:
-        cand[:D] = pi[:D]
+        _put(cand, pi, D)
     else:
         if n_u0 > U2 * (1.0 + _BALL_TOL):
             return 0
         rho = np.sqrt(max(U2 - n_u0, 0.0))
         dist = np.sqrt(max(n_pi - n_u0, 0.0))
         if rho <= 0.0 or dist <= 0.0:
-            cand[:D] = u0[:D]
+            _put(cand, u0, D)
             return 1
         for k in range(D):
             cand[k] = u0[k] + (rho / dist) * (pi[k] - u0[k])
@@ -163,7 +172,7 @@ def _projection_candidate(un, G, b, idx, s, U, D, W, cand):
     return 2
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _project(un, G, b, K, U, D, ftol, W, idx, cand, out):
     """Nearest feasible candidate to un into out; True if one exists. Stops at the first
     feasible candidate with non-negative multipliers (the unique KKT point)."""
@@ -184,7 +193,7 @@ def _project(un, G, b, K, U, D, ftol, W, idx, cand, out):
                 ok = (d2 < best or kind == 2) and n2 <= U * U * (1.0 + _BALL_TOL)
                 if ok and _feasible(G, b, K, D, cand, ftol, hint):
                     best = d2
-                    out[:D] = cand[:D]
+                    _put(out, cand, D)
                     if kind == 2:
                         return True
             if s == 0 or not _next_comb(idx, s, K):
@@ -192,7 +201,7 @@ def _project(un, G, b, K, U, D, ftol, W, idx, cand, out):
     return best < np.inf
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _margin_candidate(G, b, idx, s, U, D, W, cand):
     """Maximiser of the common margin of idx[:s] over the ball (module docstring)."""
     A, L, r, y, c, u0 = W[0], W[1], W[2, 0], W[2, 1], W[2, 2], W[2, 3]
@@ -229,7 +238,7 @@ def _margin_candidate(G, b, idx, s, U, D, W, cand):
     return n2 <= U * U * (1.0 + _BALL_TOL)  # a candidate outside the ball bounds nothing
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _margin_above(G, b, K, D, u, floor, hint):
     """Smallest margin of u, or -inf as soon as one margin is <= floor (constraint hint[0]
     first, as in _feasible)."""
@@ -249,11 +258,12 @@ def _margin_above(G, b, K, D, u, floor, hint):
     return m
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _max_margin(G, b, K, U, D, W, idx, cand, out):
     """t* (module docstring) and a maximiser into out."""
     best = -np.inf
-    hint = np.zeros(1, np.int64)
+    hint = idx[4:5]  # idx[:s] holds the subset, s <= 4 here
+    hint[0] = 0
     for s in range(1, min(D + 1, K) + 1):
         for a in range(s):
             idx[a] = a
@@ -262,13 +272,13 @@ def _max_margin(G, b, K, U, D, W, idx, cand, out):
                 t = _margin_above(G, b, K, D, cand, best, hint)
                 if t > best:
                     best = t
-                    out[:D] = cand[:D]
+                    _put(out, cand, D)
             if not _next_comb(idx, s, K):
                 break
     return best
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _solve(un, G, b, K, U, D, W, idx, cand, u_best, out, ftol=-1.0):
     """The filter's QCQP for one agent; returns (status, t*) and writes the command to out.
 
@@ -282,7 +292,7 @@ def _solve(un, G, b, K, U, D, W, idx, cand, u_best, out, ftol=-1.0):
     if ftol < 0.0:
         ftol = _ftol(un, b, K, D)
     if n2 <= U * U and _margin(G, b, K, D, un) >= 0.0:
-        out[:D] = un[:D]
+        _put(out, un, D)
         return STATUS_NOMINAL, np.inf
     hopeless = False  # a constraint asking for more than U along a unit normal
     for k in range(K):
@@ -293,11 +303,11 @@ def _solve(un, G, b, K, U, D, W, idx, cand, u_best, out, ftol=-1.0):
     for k in range(K):
         b[k] += t
     if not _project(un, G, b, K, U, D, ftol, W, idx, cand, out):
-        out[:D] = u_best[:D]  # the max-margin set is this one point (up to ftol)
+        _put(out, u_best, D)  # the max-margin set is this one point (up to ftol)
     return (STATUS_INFEASIBLE if t < -ftol else STATUS_PROJECTED), t
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _ftol(un, b, K, D):
     """Constraint tolerance 1e-9 (1 + max(||un||, max_k |b_k|)) (m/s^2)."""
     n2 = 0.0
@@ -317,7 +327,7 @@ WS_MAX = 32
 WS_ADD = 4
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _solve_ws(un, G, b, K, U, D, W, idx, cand, u_best, out, Gw, bw, ws, marg, cap):
     """:func:`_solve` for many constraints, in time bounded by ``cap``. Up to WS_DIRECT
     constraints it is :func:`_solve`. Beyond, it solves on a working set (first the WS_DIRECT
@@ -344,7 +354,7 @@ def _solve_ws(un, G, b, K, U, D, W, idx, cand, u_best, out, Gw, bw, ws, marg, ca
         marg[k] = acc
         low = min(low, acc)
     if n2 <= U * U and low >= 0.0:
-        out[:D] = un[:D]
+        _put(out, un, D)
         return STATUS_NOMINAL, np.inf
     kw = _ws_add(marg, K, ws, 0, WS_DIRECT, np.inf)
     while True:
@@ -367,7 +377,7 @@ def _solve_ws(un, G, b, K, U, D, W, idx, cand, u_best, out, Gw, bw, ws, marg, ca
         kw = grown
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _ws_add(marg, K, ws, kw, n, below):
     """Append to ws[:kw] up to n constraints not in it whose margin is < ``below``, the
     smallest first; returns the new count."""
@@ -387,7 +397,7 @@ def _ws_add(marg, K, ws, kw, n, below):
     return kw
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _sigma_min(e, v, eps, a, T, c, lam, tau=0.0):
     """(H, sigma_min): the barrier and the smallest line-of-sight relative acceleration
     that keeps H(next) >= (1 - lam) H, E(next) >= min(E, 0) and e(next) >= min(e, 0)
@@ -411,10 +421,46 @@ def _sigma_min(e, v, eps, a, T, c, lam, tau=0.0):
     return H, max(s_a, s_b, s_e)
 
 
+#: relative and absolute slack of :func:`_far` over the rounding of the exact threshold
+_FAR_REL = 1e-6
+_FAR_ABS = 1e-9
+
+
+@njit(cache=True, nogil=True, _nrt=False, inline="always")  # see _constraints
+def _far(d2, w2, far):
+    """Whether a UAV at squared distance d2 and squared relative speed w2 is too far for its
+    constraint to bind, i.e. its right-hand side is <= -U whatever the direction, without
+    computing the barrier (docs/safety.md, "Skipping far UAVs"). ``far``: :func:`_far_terms`
+    of the agent for that kind of UAV."""
+    Ds, T, tau, lam, beta, g, S, epsm, k1, k2 = far
+    W = np.sqrt(w2)
+    Q = max(lam * (W - beta) + T * S + epsm, 0.0)
+    Dm = (T + tau) * W + tau * epsm + g * S
+    Y = tau * W + Q * Q * k1 + Dm * k2
+    r = Ds + Y * (1.0 + _FAR_REL) + _FAR_ABS
+    return d2 >= r * r
+
+
+@njit(cache=True, nogil=True, _nrt=False, inline="always")
+def _far_terms(pr, fn, coop):
+    """The constants of :func:`_far` for an agent whose flocking command has norm fn, against
+    an unpaired UAV (``coop`` False) or another filtered one (True)."""
+    Ds, alpha, A_o, lam, T, c, U, tau = pr[0], pr[1], pr[2], pr[4], pr[5], pr[6], pr[7], pr[8]
+    # the barrier's alpha_ij, and S: the constraint is dropped when sigma_min <= -S
+    a = 2.0 * alpha if coop else alpha - A_o
+    S = 2.0 * (fn + U) if coop else fn + U + A_o
+    den = 2.0 * a * lam * lam  # underflows only for a subnormal alpha_ij: then skip none
+    return (
+        Ds, T, tau, lam, (c - 0.5) * a * T, c * T * T + tau * T, S,
+        2.0 * (1.0 - c) * T * S, 1.0 / den if den > 0.0 else np.inf, 2.0 / lam,
+    )  # fmt: skip
+
+
 @njit(cache=True, nogil=True, _nrt=False, inline="always")  # see _constraints
 def _constrain_one(
-    b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, lam, T, c, tau, U, G, rhs, n, K, hmin
-):
+    b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, lam, T, c, tau, U, G, rhs, n, K, hmin,
+    far_o, far_c, prune,
+):  # fmt: skip
     """Agent i's constraint against UAV j, appended to G, rhs when it binds; returns (K, hmin,
     ok), ok False for a non-finite pair (the caller then stops)."""
     D = q.shape[2]
@@ -426,6 +472,8 @@ def _constrain_one(
     if not (np.isfinite(d2) and np.isfinite(w2)):
         return K, hmin, False
     if d2 >= R2 and j != mate:
+        return K, hmin, True
+    if prune and _far(d2, w2, far_c if coop[j] else far_o):
         return K, hmin, True
     d = np.sqrt(d2)
     for k in range(D):
@@ -472,6 +520,7 @@ def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
     N, D = q.shape[1], q.shape[2]
     Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
     tau = pr[8]
+    prune = pr[9] != 0.0
     K = 0
     hmin = np.inf
     fn = 0.0
@@ -480,6 +529,7 @@ def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
     fn = np.sqrt(fn)
     if not np.isfinite(fn):
         return 0, np.nan, False
+    far_o, far_c = _far_terms(pr, fn, False), _far_terms(pr, fn, True)
     if grid:
         for k in range(D):
             pt[k] = q[b, i, k]
@@ -492,7 +542,7 @@ def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
             continue
         K, hmin, ok = _constrain_one(
             b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, lam, T, c, tau, U, G, rhs,
-            n, K, hmin,
+            n, K, hmin, far_o, far_c, prune,
         )  # fmt: skip
         if not ok:
             return 0, np.nan, False
@@ -569,7 +619,7 @@ def _filter_kernel(
                 )
             else:  # non-finite state (a diverged swarm): pass the command through
                 status = STATUS_INFEASIBLE
-                uo[:D] = uin[:D]
+                _put(uo, uin, D)
             dc = 0.0
             for k in range(D):
                 u[b, m, k] = uo[k]

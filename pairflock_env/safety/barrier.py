@@ -57,8 +57,9 @@ class SafetyOutput:
     maximises the smallest constraint margin), or the agent's state or flocking command was
     not finite (a diverged swarm: the nominal is passed through)."""
     barrier: np.ndarray
-    """(B, M) smallest barrier value H over the sensed UAVs, m/s (inf: none sensed, NaN: a
-    non-finite state)."""
+    """(B, M) smallest barrier value H over the sensed UAVs the filter evaluates, m/s (inf:
+    none, NaN: a non-finite state). Unpaired UAVs it proves too far to bind are skipped
+    without computing H; theirs is > 0 (docs/safety.md, "Skipping far UAVs")."""
 
     def arrays(self) -> tuple[np.ndarray, ...]:
         """(u, active, correction, infeasible, barrier), the kernel's output order."""
@@ -128,6 +129,7 @@ class SafetyFilter:
                 P.position_gain,
                 P.accel_limit,
                 P.reaction_time,
+                1.0,  # skip the UAVs too far to bind (_kernels._far); 0: evaluate them all
             ]
         )
 
