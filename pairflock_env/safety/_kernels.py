@@ -432,7 +432,7 @@ def _far(d2, w2, far):
     constraint to bind, i.e. its right-hand side is <= -U whatever the direction, without
     computing the barrier (docs/safety.md, "Skipping far UAVs"). ``far``: :func:`_far_terms`
     of the agent for that kind of UAV."""
-    Ds, T, tau, lam, beta, g, S, epsm, k1, k2 = far
+    Ds, T, tau, lam, beta, g, S, epsm, k1, k2, _ = far
     W = np.sqrt(w2)
     Q = max(lam * (W - beta) + T * S + epsm, 0.0)
     Dm = (T + tau) * W + tau * epsm + g * S
@@ -444,7 +444,8 @@ def _far(d2, w2, far):
 @njit(cache=True, nogil=True, _nrt=False, inline="always")
 def _far_terms(pr, fn, coop):
     """The constants of :func:`_far` for an agent whose flocking command has norm fn, against
-    an unpaired UAV (``coop`` False) or another filtered one (True)."""
+    an unpaired UAV (``coop`` False) or another filtered one (True); entry 6 is S, the bound
+    on the relative acceleration, and entry 10 the barrier's alpha_ij."""
     Ds, alpha, A_o, lam, T, c, U, tau = pr[0], pr[1], pr[2], pr[4], pr[5], pr[6], pr[7], pr[8]
     # the barrier's alpha_ij, and S: the constraint is dropped when sigma_min <= -S
     a = 2.0 * alpha if coop else alpha - A_o
@@ -452,13 +453,13 @@ def _far_terms(pr, fn, coop):
     den = 2.0 * a * lam * lam  # underflows only for a subnormal alpha_ij: then skip none
     return (
         Ds, T, tau, lam, (c - 0.5) * a * T, c * T * T + tau * T, S,
-        2.0 * (1.0 - c) * T * S, 1.0 / den if den > 0.0 else np.inf, 2.0 / lam,
+        2.0 * (1.0 - c) * T * S, 1.0 / den if den > 0.0 else np.inf, 2.0 / lam, a,
     )  # fmt: skip
 
 
 @njit(cache=True, nogil=True, _nrt=False, inline="always")  # see _constraints
 def _constrain_one(
-    b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, lam, T, c, tau, U, G, rhs, n, K, hmin,
+    b, i, j, mate, q, p, f, fn, coop, Ds, A_o, R2, lam, T, c, tau, U, G, rhs, n, K, hmin,
     far_o, far_c, prune,
 ):  # fmt: skip
     """Agent i's constraint against UAV j, appended to G, rhs when it binds; returns (K, hmin,
@@ -473,7 +474,8 @@ def _constrain_one(
         return K, hmin, False
     if d2 >= R2 and j != mate:
         return K, hmin, True
-    if prune and _far(d2, w2, far_c if coop[j] else far_o):
+    kind = far_c if coop[j] else far_o
+    if prune and _far(d2, w2, kind):
         return K, hmin, True
     d = np.sqrt(d2)
     for k in range(D):
@@ -485,10 +487,10 @@ def _constrain_one(
     for k in range(D):
         v += n[k] * (p[b, i, k] - p[b, j, k])
         nf += n[k] * f[k]
-    a = 2.0 * alpha if coop[j] else alpha - A_o
+    a = kind[10]  # the barrier's alpha_ij
     eps = 0.0
     if c < 1.0:  # rotation of n within the step (docs/safety.md)
-        amax = 2.0 * (fn + U) if coop[j] else fn + U + A_o
+        amax = kind[6]  # the bound on the relative acceleration
         den = d + min(d, Ds)  # 0 for coincident UAVs: n may then turn by anything (cap 2)
         geo = min(2.0, 2.0 * T * (np.sqrt(w2) + c * T * amax) / den) if den > 0.0 else 2.0
         eps = (1.0 - c) * T * amax * geo
@@ -518,7 +520,7 @@ def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
     all N, so the same constraints (the caller uses it only for a swarm the grid holds whose
     state is finite and bounded, where the scan would skip exactly the UAVs out of range)."""
     N, D = q.shape[1], q.shape[2]
-    Ds, alpha, A_o, R2, lam, T, c, U = pr[0], pr[1], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
+    Ds, A_o, R2, lam, T, c, U = pr[0], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
     tau = pr[8]
     prune = pr[9] != 0.0
     K = 0
@@ -541,7 +543,7 @@ def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
         if j == i:
             continue
         K, hmin, ok = _constrain_one(
-            b, i, j, mate, q, p, f, fn, coop, Ds, alpha, A_o, R2, lam, T, c, tau, U, G, rhs,
+            b, i, j, mate, q, p, f, fn, coop, Ds, A_o, R2, lam, T, c, tau, U, G, rhs,
             n, K, hmin, far_o, far_c, prune,
         )  # fmt: skip
         if not ok:
