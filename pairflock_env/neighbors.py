@@ -260,6 +260,16 @@ def _axis_range(c, n, wrap, L):
 
 
 @jit_inline
+def block_count(g, b, c0, c1, c2, L):
+    """The number of buckets :func:`block_buckets` lists for the same block."""
+    m = 1
+    for k, c in ((0, c0), (1, c1), (2, c2)):
+        lo, hi, _ = _axis_range(c, g.dims[b, k], g.wrap[b, k], L)
+        m *= max(hi - lo + 1, 0)
+    return m
+
+
+@jit_inline
 def block_buckets(g, b, c0, c1, c2, L, out):
     """Buckets of the cells within L (Chebyshev, in cells) of cell (c0, c1, c2), into
     ``out``.
@@ -405,22 +415,34 @@ def _point_d2(q, b, j, point):
 def within_radius(q, b, point, r2, exclude, g, out):
     """Indices of the UAVs of swarm b with squared distance to ``point`` below ``r2``
     (``exclude`` left out), in increasing order, into ``out``; returns their number.
-    Swarms the grid does not hold, and points far outside it, are scanned in full."""
+
+    The grid's block of cells around the point is searched unless checking every UAV is
+    cheaper: for swarms the grid does not hold, points far outside it, blocks with more
+    cells than the swarm has UAVs, and blocks holding so many UAVs that sorting them into
+    index order (``3 n log2 n``) would cost more than the N distance checks of the scan. The
+    result is the same either way."""
     n = 0
+    N = q.shape[1]
     c0, c1, c2, near = point_cell(g, b, point)
     L = np.sqrt(r2) * g.inv_h + _ROUNDING
-    if g.ok[b] and near and L < _MAX_CELLS:
-        nb, _ = block_buckets(g, b, c0, c1, c2, max(int(np.ceil(L)), 1), g.buckets)
+    Li = max(int(np.ceil(L)), 1) if L < _MAX_CELLS else 0
+    if g.ok[b] and near and Li > 0 and block_count(g, b, c0, c1, c2, Li) < N:
+        nb, _ = block_buckets(g, b, c0, c1, c2, Li, g.buckets)
+        m = 0
         for t in range(nb):
             bk = g.buckets[t]
-            for s in range(g.start[b, bk], g.start[b, bk + 1]):
-                j = g.order[b, s]
-                if j != exclude and _point_d2(q, b, j, point) < r2:
-                    out[n] = j
-                    n += 1
-        sort_ints(out, n)
-        return n
-    for j in range(q.shape[1]):
+            m += g.start[b, bk + 1] - g.start[b, bk]
+        if 3.0 * m * np.log2(m + 1.0) < N:
+            for t in range(nb):
+                bk = g.buckets[t]
+                for s in range(g.start[b, bk], g.start[b, bk + 1]):
+                    j = g.order[b, s]
+                    if j != exclude and _point_d2(q, b, j, point) < r2:
+                        out[n] = j
+                        n += 1
+            sort_ints(out, n)
+            return n
+    for j in range(N):
         if j != exclude and _point_d2(q, b, j, point) < r2:
             out[n] = j
             n += 1

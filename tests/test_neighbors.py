@@ -10,7 +10,13 @@ from pairflock_env import PairFlockCore, make_config
 from pairflock_env.config import corner_diagonals
 from pairflock_env.flocking import FlockingParams, flocking_pass, pair_pass
 from pairflock_env.grid_placement import place, redraw_conflicts
-from pairflock_env.neighbors import NeighborGrid, nearest_indices
+from pairflock_env.neighbors import (
+    GridArrays,
+    NeighborGrid,
+    block_count,
+    nearest_indices,
+    point_cell,
+)
 
 
 def same(a: np.ndarray, b: np.ndarray) -> bool:
@@ -115,6 +121,26 @@ def test_grid_flocking_trajectory_equals_all_pairs():
         runs.append(q)
     assert np.abs(runs[0] - q0).max() > 1.0  # the swarm did move
     assert same(runs[0], runs[1])
+
+
+def test_within_radius_takes_the_grid_or_the_scan_by_block_size():
+    """A query whose block has fewer cells than the swarm has UAVs visits the cells, a
+    larger one checks every UAV; both give the brute-force answer, both regimes occur."""
+    rng = np.random.default_rng(3)
+    N, D, cell = 500, 2, 2.0
+    q = rng.uniform(-60.0, 60.0, (1, N, D))
+    grid = NeighborGrid(1, N, D, cell).build(q)
+    g = GridArrays(*grid.arrays)
+    kinds = set()
+    for radius in (1.0, 5.0, 12.0, 20.0, 40.0, 90.0):
+        for _ in range(10):
+            point = rng.uniform(-70.0, 70.0, D)
+            c0, c1, c2, _ = point_cell(g, 0, np.array(point))
+            L = max(int(np.ceil(radius / cell + 1e-9)), 1)
+            kinds.add(block_count(g, 0, c0, c1, c2, L) < N)
+            want = np.flatnonzero(np.sum((q[0] - point) ** 2, axis=1) < radius**2).tolist()
+            assert grid.within(0, point, radius).tolist() == want
+    assert kinds == {True, False}
 
 
 def test_within_radius_matches_brute_force():
