@@ -65,6 +65,7 @@ GridArrays = namedtuple(
         "start",
         "order",
         "buckets",
+        "mark",
     ],
 )
 GridArrays.__doc__ = """The arrays of a :class:`NeighborGrid`, as numba kernels take them.
@@ -75,7 +76,8 @@ the axis; ``stride`` (B, 3) bucket = sum_k (cell_k + pad_k) stride_k; ``ring`` (
 ``n_ring`` (B,) bucket offsets of the one-ring (0 offsets when folded); ``ok`` (B,) grid
 usable; ``bucket`` (B, N) each UAV's bucket; ``start`` (B, C + 1) and ``order`` (B, N):
 bucket t holds UAVs ``order[b, start[b, t]:start[b, t + 1]]``. ``h`` / ``inv_h``: cell edge
-(m) and its inverse; ``buckets`` (C,): scratch for the bucket list of one query.
+(m) and its inverse; ``buckets`` (C,): scratch for the bucket list of one query; ``mark``
+(ceil(N / 64),) uint64: a zeroed bitmap over the UAV indices, scratch of one query.
 """
 
 
@@ -402,6 +404,46 @@ def sort_ints(a, n):
         a[s] = x
 
 
+#: de Bruijn sequence and table: the index of the one set bit of a power of two w is
+#: _DEBRUIJN_INDEX[(w * _DEBRUIJN) >> 58] (multiplication modulo 2^64)
+_DEBRUIJN = np.uint64(0x03F79D71B4CB0A89)
+_DEBRUIJN_INDEX = np.zeros(64, np.int64)
+for _i in range(64):
+    _DEBRUIJN_INDEX[((1 << _i) * 0x03F79D71B4CB0A89) % 2**64 >> 58] = _i
+del _i
+#: lists longer than this are put in order through the bitmap, shorter ones by insertion
+_SORT_BITMAP = 24
+
+
+@jit_inline
+def order_indices(a, n, mark):
+    """Put the distinct indices a[:n] in increasing order: an insertion sort for short lists,
+    else a pass through the bitmap ``mark`` (zeroed, one bit per index; left zeroed), whose
+    cost is n plus the words between the smallest and largest index, not n^2 or n log n."""
+    if n <= _SORT_BITMAP:
+        sort_ints(a, n)
+        return
+    lo = a[0] >> 6
+    hi = lo
+    one = np.uint64(1)
+    for t in range(n):
+        k = a[t] >> 6
+        mark[k] |= one << np.uint64(a[t] & 63)
+        lo = min(lo, k)
+        hi = max(hi, k)
+    m = 0
+    for k in range(lo, hi + 1):
+        w = mark[k]
+        if w == 0:
+            continue
+        mark[k] = 0
+        while w != 0:
+            low = w & (~w + one)  # the lowest set bit
+            a[m] = 64 * k + _DEBRUIJN_INDEX[(low * _DEBRUIJN) >> np.uint64(58)]
+            m += 1
+            w ^= low
+
+
 @jit_inline
 def _point_d2(q, b, j, point):
     d2 = 0.0
@@ -416,11 +458,10 @@ def within_radius(q, b, point, r2, exclude, g, out):
     """Indices of the UAVs of swarm b with squared distance to ``point`` below ``r2``
     (``exclude`` left out), in increasing order, into ``out``; returns their number.
 
-    The grid's block of cells around the point is searched unless checking every UAV is
-    cheaper: for swarms the grid does not hold, points far outside it, blocks with more
-    cells than the swarm has UAVs, and blocks holding so many UAVs that sorting them into
-    index order (``3 n log2 n``) would cost more than the N distance checks of the scan. The
-    result is the same either way."""
+    The grid's block of cells around the point is searched, except for swarms the grid
+    does not hold, points far outside it, and blocks with more cells than the swarm has UAVs
+    (where visiting the cells costs more than checking every UAV): those are scanned in
+    full. The result is the same either way."""
     n = 0
     N = q.shape[1]
     c0, c1, c2, near = point_cell(g, b, point)
@@ -428,20 +469,15 @@ def within_radius(q, b, point, r2, exclude, g, out):
     Li = max(int(np.ceil(L)), 1) if L < _MAX_CELLS else 0
     if g.ok[b] and near and Li > 0 and block_count(g, b, c0, c1, c2, Li) < N:
         nb, _ = block_buckets(g, b, c0, c1, c2, Li, g.buckets)
-        m = 0
         for t in range(nb):
             bk = g.buckets[t]
-            m += g.start[b, bk + 1] - g.start[b, bk]
-        if 3.0 * m * np.log2(m + 1.0) < N:
-            for t in range(nb):
-                bk = g.buckets[t]
-                for s in range(g.start[b, bk], g.start[b, bk + 1]):
-                    j = g.order[b, s]
-                    if j != exclude and _point_d2(q, b, j, point) < r2:
-                        out[n] = j
-                        n += 1
-            sort_ints(out, n)
-            return n
+            for s in range(g.start[b, bk], g.start[b, bk + 1]):
+                j = g.order[b, s]
+                if j != exclude and _point_d2(q, b, j, point) < r2:
+                    out[n] = j
+                    n += 1
+        order_indices(out, n, g.mark)
+        return n
     for j in range(N):
         if j != exclude and _point_d2(q, b, j, point) < r2:
             out[n] = j
@@ -516,6 +552,7 @@ class NeighborGrid:
             start=np.zeros((B, C + 1), np.int64),
             order=np.zeros((B, N), np.int64),
             buckets=np.zeros(max(C, 27), np.int64),
+            mark=np.zeros((N + 63) // 64, np.uint64),
         )
         self._hits = np.empty(N, np.int64)
         self._q: np.ndarray | None = None

@@ -15,6 +15,7 @@ from pairflock_env.neighbors import (
     NeighborGrid,
     block_count,
     nearest_indices,
+    order_indices,
     point_cell,
 )
 
@@ -141,6 +142,17 @@ def test_within_radius_takes_the_grid_or_the_scan_by_block_size():
             want = np.flatnonzero(np.sum((q[0] - point) ** 2, axis=1) < radius**2).tolist()
             assert grid.within(0, point, radius).tolist() == want
     assert kinds == {True, False}
+
+
+def test_order_indices_sorts_through_the_bitmap_and_leaves_it_zeroed():
+    rng = np.random.default_rng(5)
+    mark = np.zeros((1000 + 63) // 64, np.uint64)
+    for n in (0, 1, 5, 24, 25, 64, 200, 999, 1000):
+        a = rng.permutation(1000)[:n].astype(np.int64)
+        want = np.sort(a)
+        order_indices(a, n, mark)
+        assert a.tolist() == want.tolist()
+        assert not mark.any()
 
 
 def test_within_radius_matches_brute_force():
