@@ -50,7 +50,8 @@ PRESETS: dict[str, dict[str, Any]] = {
     # A large swarm (docs/large-swarms.md): 1,000 UAVs with 10 pairs drawn anywhere in the
     # start box (grown with N at the paper's density: +-158 m), the grid search (auto). The
     # safety filter's sensing radius stays 20 m: in a dense swarm the filter's cost grows with
-    # the UAVs within it, 5x from 20 to 100 m at 1,000 UAVs (docs/large-swarms.md).
+    # the UAVs within it, 5x from 20 to 100 m at 1,000 UAVs and 7x at 10,000
+    # (docs/large-swarms.md).
     "large": dict(
         n_uavs=1000,
         pairs=tuple((2 * k, 2 * k + 1) for k in range(10)),
