@@ -280,3 +280,33 @@ def test_placement_gives_up_with_a_clear_error():
     rng, q = np.random.default_rng(0), np.zeros((3, 2))
     assert redraw_conflicts(rng, q, half[:3], np.zeros(3, bool), 0.0)
     assert np.all(q == 0.0) and rng.random() == np.random.default_rng(0).random()
+
+
+@pytest.mark.parametrize("D", [2, 3])
+def test_within_radius_is_the_brute_force_answer_property(D):
+    """Property-based: any swarm size, spread, cell, radius and point (with clusters of
+    coincident UAVs), grid or scan, insertion sort or bitmap: the brute-force answer."""
+    hypothesis = pytest.importorskip("hypothesis")
+    st = hypothesis.strategies
+
+    @hypothesis.settings(max_examples=60, deadline=None, derandomize=True)
+    @hypothesis.given(
+        n=st.integers(1, 300),
+        spread=st.floats(0.0, 500.0),
+        cell=st.floats(0.3, 30.0),
+        radius=st.floats(0.0, 400.0),
+        seed=st.integers(0, 2**32 - 1),
+        exclude=st.integers(-1, 299),
+    )
+    def check(n, spread, cell, radius, seed, exclude):
+        rng = np.random.default_rng(seed)
+        q = rng.uniform(-spread, spread, (1, n, D))
+        q[0, : n // 4] = q[0, n // 4 : 2 * (n // 4)]  # coincident UAVs
+        grid = NeighborGrid(1, n, D, cell).build(q)
+        for _ in range(3):
+            point = rng.uniform(-1.2 * spread - 1, 1.2 * spread + 1, D)
+            d2 = np.sum((q[0] - point) ** 2, axis=1)
+            want = [j for j in np.flatnonzero(d2 < radius**2) if j != exclude]
+            assert grid.within(0, point, radius, exclude).tolist() == want
+
+    check()
