@@ -441,6 +441,30 @@ def test_experiment_cli_writes_table_csv_and_figures(tmp_path):
         main(["--set", "quad_mass=-1", "--out", str(out / "bad"), "--quiet"])
 
 
+def test_turn_peak_since_filter_is_the_time_from_the_last_filter_action_to_the_peak():
+    from baselines.experiments.quadrotor_runs import scenario_metrics
+
+    t = np.arange(0.0, 65.0, 0.02)
+    err = np.where(np.abs(t - 22.0) < 1e-9, 0.9, 0.1)  # the turn peak at 22 s
+    err[np.abs(t - 40.0) < 1e-9] = 2.0  # larger, but in straight flight
+    flat = np.zeros_like(t)
+    active = np.zeros(t.shape, bool)
+
+    def since(act):
+        return scenario_metrics(t, err, flat + 3, flat, flat, filter_active=act)[
+            "turn_peak_since_filter"
+        ]
+
+    assert np.isnan(since(None))  # the filter is off
+    assert np.isnan(since(active))  # it never acted before the peak
+    active[(t > 30.0)] = True  # ...only after it
+    assert np.isnan(since(active))
+    active[np.abs(t - 20.5) < 1e-9] = True
+    assert since(active) == pytest.approx(1.5)
+    active[np.abs(t - 22.0) < 1e-9] = True  # acting at the peak
+    assert since(active) == 0.0
+
+
 def test_experiment_gains_reach_sliding_mode_and_bad_ones_name_their_flag(tmp_path):
     import csv
 

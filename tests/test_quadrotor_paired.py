@@ -84,6 +84,22 @@ def test_compare_counts_discordant_runs_and_pairs_by_seed():
     assert again["change"] == res["change"]
 
 
+def test_compare_splits_turn_peaks_by_when_the_filter_last_acted():
+    a = _runs({1}, set(), seeds=range(10))
+    b = _runs({2, 3, 7}, set(), seeds=range(10), turn=0.9)
+    since = {2: "0.2", 3: "1.5", 7: "20.0", 8: ""}  # "": it never acted before the peak
+    for r in b:
+        if r["dynamics"] == "quadrotor":
+            r["turn_peak_since_filter"] = since.get(int(r["seed"]), "30.0")
+    res = compare_runs(a, b, rng=np.random.default_rng(0), n_boot=50)
+    recent, other = res["turn_peak_by_filter"]
+    assert "within 1.5 s" in recent[0]
+    # seeds 2 and 3 acted recently (both miss in B); the other 8 hold A's miss (1) and B's (7)
+    assert recent[1:4] == (2, 0, 2) and other[1:4] == (8, 1, 1)
+    assert "Turn peaks by when on's safety filter" in "\n".join(paired_lines(res, "off", "on"))
+    assert compare_runs(a, a, rng=np.random.default_rng(0), n_boot=5)["turn_peak_by_filter"] is None
+
+
 @pytest.mark.parametrize(
     "kwargs, exc, match",
     [

@@ -6,7 +6,9 @@ Each folder is an ``--out`` of ``python -m baselines.quadrotor_experiment``; the
 folders on one side are pooled. For the seeds both sides share, it prints how many quadrotor
 runs miss each Sec. VI-B criterion on each side, the runs that miss it on one side only (an
 exact McNemar test), and the median paired change of each criterion's metric with a bootstrap
-95 % CI (seeded: ``--seed``).
+95 % CI (seeded: ``--seed``). Where run B had the safety filter on (its ``results.csv`` has
+``turn_peak_since_filter``), it also splits the seeds by whether B's filter acted within
+1.5 s before B's turn peak, with the turn-peak misses and medians of both runs per group.
 """
 
 from __future__ import annotations

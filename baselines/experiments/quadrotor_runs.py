@@ -11,6 +11,10 @@ Per seed it measures (times in s, distances in m):
 * ``velocity_mismatch``: max ||p_i - p_leader|| of the unpaired UAVs in [35, 50] and [60, 65];
 * ``pair_offset``: mean distance of the pair's midpoint from the virtual leader in straight
   flight (where the pair flies relative to its flock, which stays centred on the leader);
+* ``turn_peak_since_filter``: with the safety filter on, the time from the last control
+  step on which it changed a paired UAV's command to the turn peak (0: it was acting then;
+  empty when it had not acted before the peak, or is off): whether a large turn peak is the
+  filter's deflection or the controller's own tracking after it;
 
 plus the general episode metrics of ``pairflock_env.metrics`` and, for the quadrotor, how
 often the paired UAVs fly at the acceleration/tilt limit or saturate a motor.
@@ -57,14 +61,22 @@ def scenario_metrics(
     velocity_mismatch_max: np.ndarray,
     pair_offset: np.ndarray,
     band: float = QUADROTOR.band,
+    filter_active: np.ndarray | None = None,
 ) -> dict[str, float]:
-    """The Sec. VI-B figures of one run from its series (each (T,), sampled at times t)."""
+    """The Sec. VI-B figures of one run from its series (each (T,), sampled at times t;
+    ``filter_active``: whether the safety filter changed a paired UAV's command at each
+    sample, None without the filter)."""
     err = np.abs(pair_error)
     inside = np.flatnonzero(err < band)
     straight = _window_mask(t, STRAIGHT_WINDOWS)
     turns = _window_mask(t, TURN_WINDOWS)
     vel = _window_mask(t, VELOCITY_WINDOWS)
     nan = float("nan")
+    since = nan
+    if filter_active is not None and turns.any():
+        peak = np.flatnonzero(turns)[np.argmax(err[turns])]
+        acted = np.flatnonzero(filter_active[: peak + 1])
+        since = float(t[peak] - t[acted[-1]]) if acted.size else nan
     return {
         "band_entry_time": float(t[inside[0]]) if inside.size else nan,
         "straight_max_error": float(err[straight].max()) if straight.any() else nan,
@@ -73,6 +85,7 @@ def scenario_metrics(
         "min_distance": float(min_distance.min()),
         "velocity_mismatch": float(velocity_mismatch_max[vel].max()) if vel.any() else nan,
         "pair_offset": float(pair_offset[straight].mean()) if straight.any() else nan,
+        "turn_peak_since_filter": since,
     }
 
 
@@ -90,6 +103,7 @@ class _Recorder:
         self.limited_steps = np.zeros(B, np.int64)
         self.saturated_steps = np.zeros(B, np.int64)
         self.crashed = np.zeros(B, bool)
+        self.filter_active: np.ndarray | None = None  # (B, T + 1), with the filter on
         self.attitude_of = attitude_of
         self.R = np.full((T + 1, 3, 3), np.nan) if attitude_of else None
         self.R_des = np.full((T + 1, 3, 3), np.nan) if attitude_of else None
@@ -101,6 +115,11 @@ class _Recorder:
         d2[:, np.arange(N), np.arange(N)] = np.inf
         self.min_distance[live, k] = np.sqrt(d2.min(axis=(1, 2)))[live]
         self.velocity_mismatch[live, k] = res.info["velocity_mismatch_max"][live]
+        if core.safety.enabled:
+            if self.filter_active is None:
+                self.filter_active = np.zeros(self.min_distance.shape, bool)
+            if k > 0:
+                self.filter_active[live, k] = core.safety.output.active[live].any(axis=1)
         lq, _ = core.leader_state()
         mid = 0.5 * (q[:, self.pair[0]] + q[:, self.pair[1]])
         self.pair_offset[live, k] = np.linalg.norm(mid - lq, axis=-1)[live]
@@ -133,6 +152,7 @@ def _rows(dynamics: str, policy: str, tr, rec: _Recorder) -> list[dict[str, Any]
             rec.min_distance[b],
             rec.velocity_mismatch[b],
             rec.pair_offset[b],
+            filter_active=None if rec.filter_active is None else rec.filter_active[b],
         )
         steps = max(int(tr.ended[b]), 1)
         rows.append(

@@ -100,7 +100,50 @@ def compare_runs(
         boot = np.median(rng.choice(d, size=(n_boot, d.size)), axis=1)
         lo, hi = np.percentile(boot, [2.5, 97.5])
         out["change"][m] = (float(np.median(d)), float(lo), float(hi))
+    out["turn_peak_by_filter"] = _turn_peak_by_filter(rows_a, rows_b, policy_a, policy_b, seeds)
     return out
+
+
+#: a filter action this close before run B's turn peak (s) counts as recent
+RECENT_ACTION = 1.5
+
+
+def _turn_peak_by_filter(rows_a, rows_b, policy_a, policy_b, seeds) -> list[tuple] | None:
+    """Where run B has the safety filter's timing (``turn_peak_since_filter``): the seeds
+    split by whether B's filter acted within RECENT_ACTION s before B's turn peak; per group
+    (name, runs, turn-peak misses A, misses B, median turn peak A, B). None otherwise."""
+    has = [
+        r
+        for r in rows_b
+        if r["dynamics"] == "quadrotor"
+        and r["policy"] == policy_b
+        and "turn_peak_since_filter" in r
+    ]
+    if not has:
+        return None
+    since = {int(float(r["seed"])): float(r["turn_peak_since_filter"] or "nan") for r in has}
+    s = np.array([since.get(int(k), np.nan) for k in seeds])
+    pa = _metric(rows_a, policy_a, "turn_peak_error", seeds)
+    pb = _metric(rows_b, policy_b, "turn_peak_error", seeds)
+    lim = QUADROTOR.turn_peak_max
+    groups = []
+    recent = s <= RECENT_ACTION  # NaN (no action before the peak) is not recent
+    for name, m in (
+        (f"filter acted within {RECENT_ACTION:g} s before the peak", recent),
+        ("filter did not", ~recent),
+    ):
+        if m.any():
+            groups.append(
+                (
+                    name,
+                    int(m.sum()),
+                    int((pa[m] > lim).sum()),
+                    int((pb[m] > lim).sum()),
+                    float(np.median(pa[m])),
+                    float(np.median(pb[m])),
+                )
+            )
+    return groups
 
 
 def paired_lines(result: Mapping[str, Any], label_a: str = "A", label_b: str = "B") -> list[str]:
@@ -128,4 +171,16 @@ def paired_lines(result: Mapping[str, Any], label_a: str = "A", label_b: str = "
     ]
     for m, (med, lo, hi) in result["change"].items():
         lines.append(f"| {m} | {med:+.4f} | [{lo:+.4f}, {hi:+.4f}] |")
+    groups = result.get("turn_peak_by_filter")
+    if groups:
+        lines += [
+            "",
+            f"Turn peaks by when {label_b}'s safety filter last acted before them:",
+            "",
+            f"| runs | count | {label_a}: turn-peak misses | {label_b}: turn-peak misses | "
+            f"{label_a}: median turn peak (m) | {label_b}: median turn peak (m) |",
+            "|---|---|---|---|---|---|",
+        ]
+        for name, n_, ma, mb, med_a, med_b in groups:
+            lines.append(f"| {name} | {n_} | {ma} | {mb} | {med_a:.3f} | {med_b:.3f} |")
     return lines
