@@ -417,12 +417,13 @@ _SORT_BITMAP = 24
 
 @jit_inline
 def order_indices(a, n, mark):
-    """Put the distinct indices a[:n] in increasing order: an insertion sort for short lists,
-    else a pass through the bitmap ``mark`` (zeroed, one bit per index; left zeroed), whose
-    cost is n plus the words between the smallest and largest index, not n^2 or n log n."""
+    """Put the distinct indices a[:n] in increasing order and return n: an insertion sort
+    for short lists, else a pass through the bitmap ``mark`` (zeroed, one bit per index; left
+    zeroed), whose cost is n plus the words between the smallest and largest index, not n^2
+    or n log n (a repeated index would be kept once, and the count returned says so)."""
     if n <= _SORT_BITMAP:
         sort_ints(a, n)
-        return
+        return n
     lo = a[0] >> 6
     hi = lo
     one = np.uint64(1)
@@ -442,6 +443,7 @@ def order_indices(a, n, mark):
             a[m] = 64 * k + _DEBRUIJN_INDEX[(low * _DEBRUIJN) >> np.uint64(58)]
             m += 1
             w ^= low
+    return m
 
 
 @jit_inline
@@ -476,8 +478,7 @@ def within_radius(q, b, point, r2, exclude, g, out):
                 if j != exclude and _point_d2(q, b, j, point) < r2:
                     out[n] = j
                     n += 1
-        order_indices(out, n, g.mark)
-        return n
+        return order_indices(out, n, g.mark)
     for j in range(N):
         if j != exclude and _point_d2(q, b, j, point) < r2:
             out[n] = j
