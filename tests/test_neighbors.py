@@ -288,6 +288,7 @@ def test_within_radius_is_the_brute_force_answer_property(D):
     coincident UAVs), grid or scan, insertion sort or bitmap: the brute-force answer."""
     hypothesis = pytest.importorskip("hypothesis")
     st = hypothesis.strategies
+    seen = set()  # which path each query took: the scan, or the grid with either ordering
 
     @hypothesis.settings(max_examples=60, deadline=None, derandomize=True)
     @hypothesis.given(
@@ -303,10 +304,18 @@ def test_within_radius_is_the_brute_force_answer_property(D):
         q = rng.uniform(-spread, spread, (1, n, D))
         q[0, : n // 4] = q[0, n // 4 : 2 * (n // 4)]  # coincident UAVs
         grid = NeighborGrid(1, n, D, cell).build(q)
+        g = GridArrays(*grid.arrays)
         for _ in range(3):
             point = rng.uniform(-1.2 * spread - 1, 1.2 * spread + 1, D)
             d2 = np.sum((q[0] - point) ** 2, axis=1)
             want = [j for j in np.flatnonzero(d2 < radius**2) if j != exclude]
             assert grid.within(0, point, radius, exclude).tolist() == want
+            c0, c1, c2, _ = point_cell(g, 0, np.array(point))
+            L = max(int(np.ceil(radius * g.inv_h + 1e-4)), 1)
+            if block_count(g, 0, c0, c1, c2, L) >= n:
+                seen.add("scan")
+            else:
+                seen.add("grid, bitmap" if len(want) > 24 else "grid, insertion")
 
     check()
+    assert seen == {"scan", "grid, bitmap", "grid, insertion"}

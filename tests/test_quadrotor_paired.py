@@ -91,6 +91,9 @@ def test_compare_splits_turn_peaks_by_when_the_filter_last_acted():
     for r in b:
         if r["dynamics"] == "quadrotor":
             r["turn_peak_since_filter"] = since.get(int(r["seed"]), "30.0")
+            r["safety_active_steps"] = "5"  # the experiment writes it with the filter on
+    for r in a:  # filter off: the column is there (NaN), the safety columns are not
+        r["turn_peak_since_filter"] = "nan"
     res = compare_runs(a, b, rng=np.random.default_rng(0), n_boot=50)
     recent, other = res["turn_peak_by_filter"]
     assert "within 1.5 s" in recent[0]

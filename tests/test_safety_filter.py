@@ -587,6 +587,76 @@ def test_skipping_far_uavs_changes_no_command():
     assert changed > 50
 
 
+def _hard_params(rng):
+    """Parameters where sigma_min is computed from large cancelling terms: tiny steps, A_o
+    within a hair of alpha, slow barrier rates (the rounding _far must cover)."""
+    U = float(10 ** rng.uniform(0, 3))
+    alpha = U * float(rng.uniform(0.05, 1))
+    return SafetyParams(
+        accel_limit=U,
+        brake_accel=alpha,
+        other_accel=alpha * (1 - float(10 ** rng.uniform(-7, -1))),
+        dt=float(10 ** rng.uniform(-6, -2)),
+        substeps=int(rng.choice([1, 2])),
+        integrator=str(rng.choice(["semi_implicit", "exact"])),
+        reaction_time=float(rng.choice([0.0, 10 ** rng.uniform(-3, -0.5)])),
+        decay=float(10 ** rng.uniform(-3, 0)),
+        margin=0.01,
+        sensing_radius=float(rng.choice([100.0, 1e4])),
+    )
+
+
+def test_the_skip_changes_no_command_at_its_threshold_where_rounding_is_hardest():
+    """One UAV on the line of sight at the skip's own threshold (bisected), closing, with
+    the flocking command pushing towards it: the filter with and without the skip gives the
+    same outputs, including a case the unpadded test got wrong (active only without it)."""
+    rng = np.random.default_rng(31)
+    cases = [
+        (
+            SafetyParams(accel_limit=6.760772096535446, brake_accel=5.4086176772283565,
+                         other_accel=5.408548440505239, dt=2.3529257960149835e-06,
+                         decay=0.0012333969252901512, margin=0.01, sensing_radius=100.0),
+            4.9020404298977835, 0.0, 0.0, False,
+        )
+    ]  # fmt: skip
+    for _ in range(1500):
+        coop = bool(rng.integers(2))
+        cases.append(
+            (_hard_params(rng), None, float(rng.choice([0.0, 10 ** rng.uniform(-3, 2)])),
+             float(rng.choice([0.0, rng.uniform(0, 2)])), coop)
+        )  # fmt: skip
+    tested = 0
+    for P, d, W, fscale, coop in cases:
+        ag, mates = ([0, 1], [1, 0]) if coop else ([0], None)
+        on = SafetyFilter(P, ag, 2, mates)
+        off = SafetyFilter(P, ag, 2, mates)
+        off._pr[9] = 0.0
+        if d is None:  # bisect the skip's threshold for this closing speed
+            fn = fscale * P.accel_limit
+            far = _far_terms(on._pr, fn, coop)
+            lo, hi = P.barrier_distance, P.sensing_radius
+            if not _far(hi * hi * (1 - 1e-12), W * W, far):
+                continue
+            for _ in range(80):
+                mid = 0.5 * (lo + hi)
+                lo, hi = (lo, mid) if _far(mid * mid, W * W, far) else (mid, hi)
+            d = hi
+        fn = fscale * P.accel_limit
+        q = np.zeros((1, 2, 2))
+        q[0, 1, 0] = d
+        p = np.zeros((1, 2, 2))
+        p[0, 0, 0] = W  # agent 0 closes on UAV 1 at W
+        f = np.zeros((1, len(ag), 2))
+        f[0, 0, 0] = fn  # and its flocking command pushes it on
+        un = np.zeros((1, len(ag), 2))
+        un[0, 0, 0] = P.accel_limit
+        a, b = on.apply(q, p, f, un), off.apply(q, p, f, un)
+        for x, y in zip(a.arrays()[:4], b.arrays()[:4], strict=True):
+            assert np.array_equal(x, y), (P, d, W, fn, coop)
+        tested += 1
+    assert tested > 500
+
+
 def _random_state(rng, B, N, D):
     return rng.uniform(-4, 4, (B, N, D)), rng.normal(0, 10, (B, N, D))
 

@@ -36,6 +36,8 @@ def test_grid_gives_the_full_scan_bit_for_bit(D, kw):
     agents = np.array([0, 1, 2, 3, 10, 11])
     partners = np.array([1, 0, 3, 2, 11, 10])
     filt = SafetyFilter(P, agents, N, partners)
+    every = SafetyFilter(P, agents, N, partners)
+    every._pr[9] = 0.0  # the far-UAV skip off: the same commands and flags on the grid too
     for spread in (8.0, 30.0, 200.0):  # dense, medium, partners far apart
         q, p = _case(rng, B, N, D, spread)
         q[0, 5] = q[0, 0]  # a coincident pair
@@ -48,6 +50,9 @@ def test_grid_gives_the_full_scan_bit_for_bit(D, kw):
             scan = filt.apply(q, p, f, un)
             fast = filt.apply(q, p, f, un, grid=grid)
             for a, b in zip(scan.arrays(), fast.arrays(), strict=True):
+                np.testing.assert_array_equal(a, b)
+            unskipped = every.apply(q, p, f, un, grid=grid)
+            for a, b in zip(fast.arrays()[:4], unskipped.arrays()[:4], strict=True):
                 np.testing.assert_array_equal(a, b)
             assert scan.active[:, :].any()
 

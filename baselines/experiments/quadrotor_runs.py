@@ -11,10 +11,11 @@ Per seed it measures (times in s, distances in m):
 * ``velocity_mismatch``: max ||p_i - p_leader|| of the unpaired UAVs in [35, 50] and [60, 65];
 * ``pair_offset``: mean distance of the pair's midpoint from the virtual leader in straight
   flight (where the pair flies relative to its flock, which stays centred on the leader);
-* ``turn_peak_since_filter``: with the safety filter on, the time from the last control
-  step on which it changed a paired UAV's command to the turn peak (0: it was acting then;
-  empty when it had not acted before the peak, or is off): whether a large turn peak is the
-  filter's deflection or the controller's own tracking after it;
+* ``turn_peak_since_filter``: with the safety filter on, the time from the end of the last
+  control period whose command it changed (for either paired UAV) to the turn peak (0: it
+  changed the last command before the peak; NaN when it had not acted before the peak, or
+  is off): whether a large turn peak is the filter's deflection or the controller's own
+  tracking after it;
 
 plus the general episode metrics of ``pairflock_env.metrics`` and, for the quadrotor, how
 often the paired UAVs fly at the acceleration/tilt limit or saturate a motor.

@@ -118,6 +118,7 @@ def _turn_peak_by_filter(rows_a, rows_b, policy_a, policy_b, seeds) -> list[tupl
         if r["dynamics"] == "quadrotor"
         and r["policy"] == policy_b
         and "turn_peak_since_filter" in r
+        and r.get("safety_active_steps", "") != ""  # written only with the filter on
     ]
     if not has:
         return None

@@ -424,6 +424,9 @@ def _sigma_min(e, v, eps, a, T, c, lam, tau=0.0):
 #: relative and absolute slack of :func:`_far` over the rounding of the exact threshold
 _FAR_REL = 1e-6
 _FAR_ABS = 1e-9
+#: :func:`_far` pads S by _FAR_ROUND eps (R_s + (T + 2 tau) W + tau eps_m) / (c T^2): the
+#: rounding of sigma_min, whose terms reach (e + T v) / (c T^2) before they cancel
+_FAR_ROUND = 64.0 * 2.0**-52
 
 
 @njit(cache=True, nogil=True, _nrt=False, inline="always")  # see _constraints
@@ -431,9 +434,11 @@ def _far(d2, w2, far):
     """Whether a UAV at squared distance d2 and squared relative speed w2 is too far for its
     constraint to bind, i.e. its right-hand side is <= -U whatever the direction, without
     computing the barrier (docs/safety.md, "Skipping far UAVs"). ``far``: :func:`_far_terms`
-    of the agent for that kind of UAV."""
-    Ds, T, tau, lam, beta, g, S, epsm, k1, k2, _ = far
+    of the agent for that kind of UAV; only for a UAV within the sensing radius (the pad for
+    rounding is bounded with R_s)."""
+    Ds, T, tau, lam, beta, g, S, epsm, k1, k2, _, k3, R = far
     W = np.sqrt(w2)
+    S = S + k3 * (R + (T + 2.0 * tau) * W + tau * epsm)  # covers the rounding of sigma_min
     Q = max(lam * (W - beta) + T * S + epsm, 0.0)
     Dm = (T + tau) * W + tau * epsm + g * S
     Y = tau * W + Q * Q * k1 + Dm * k2
@@ -451,9 +456,11 @@ def _far_terms(pr, fn, coop):
     a = 2.0 * alpha if coop else alpha - A_o
     S = 2.0 * (fn + U) if coop else fn + U + A_o
     den = 2.0 * a * lam * lam  # underflows only for a subnormal alpha_ij: then skip none
+    cT2 = c * T * T
     return (
-        Ds, T, tau, lam, (c - 0.5) * a * T, c * T * T + tau * T, S,
+        Ds, T, tau, lam, (c - 0.5) * a * T, cT2 + tau * T, S,
         2.0 * (1.0 - c) * T * S, 1.0 / den if den > 0.0 else np.inf, 2.0 / lam, a,
+        _FAR_ROUND / cT2 if cT2 > 0.0 else np.inf, np.sqrt(pr[3]),
     )  # fmt: skip
 
 
@@ -475,7 +482,7 @@ def _constrain_one(
     if d2 >= R2 and j != mate:
         return K, hmin, True
     kind = far_c if coop[j] else far_o
-    if prune and _far(d2, w2, kind):
+    if prune and d2 < R2 and _far(d2, w2, kind):  # the partner beyond R_s: always evaluated
         return K, hmin, True
     d = np.sqrt(d2)
     for k in range(D):

@@ -58,8 +58,9 @@ class SafetyOutput:
     not finite (a diverged swarm: the nominal is passed through)."""
     barrier: np.ndarray
     """(B, M) smallest barrier value H over the sensed UAVs the filter evaluates, m/s (inf:
-    none, NaN: a non-finite state). Unpaired UAVs it proves too far to bind are skipped
-    without computing H; theirs is > 0 (docs/safety.md, "Skipping far UAVs")."""
+    none, NaN: a non-finite state). UAVs within the sensing radius that it proves too far
+    to bind (unpaired or paired) are skipped without computing H; theirs is > 0
+    (docs/safety.md, "Skipping far UAVs")."""
 
     def arrays(self) -> tuple[np.ndarray, ...]:
         """(u, active, correction, infeasible, barrier), the kernel's output order."""
