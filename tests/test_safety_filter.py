@@ -657,6 +657,33 @@ def test_the_skip_changes_no_command_at_its_threshold_where_rounding_is_hardest(
     assert tested > 500
 
 
+def test_a_fast_member_of_another_pair_is_not_left_out_by_the_shortened_search():
+    """The skip's search radius comes from the unpaired UAVs' speeds and, when there are
+    other pairs, from the filtered UAVs' too: a slow flock must not hide another pair's
+    member closing fast from 25 m (its constraint binds; with the skip off it is the same)."""
+    rng = np.random.default_rng(8)
+    N = 24
+    q = np.zeros((1, N, 2))
+    p = np.zeros((1, N, 2))
+    q[0, 1] = (0.0, 2.5)  # agent 0's partner
+    q[0, 2], q[0, 3] = (25.0, 0.0), (25.0, 2.5)  # the other pair, closing at 60 m/s
+    p[0, 2, 0] = p[0, 3, 0] = -60.0
+    q[0, 4:] = rng.uniform(40.0, 90.0, (N - 4, 2))  # a slow flock, well away
+    p[0, 4:] = rng.normal(0.0, 0.2, (N - 4, 2))
+    agents, partners = [0, 1, 2, 3], [1, 0, 3, 2]
+    P = SafetyParams(accel_limit=50.0, sensing_radius=100.0)
+    on = SafetyFilter(P, agents, N, partners)
+    off = SafetyFilter(P, agents, N, partners)
+    off._pr[9] = 0.0
+    f = np.zeros((1, 4, 2))
+    un = np.zeros((1, 4, 2))
+    un[0, 0] = (50.0, 0.0)  # agent 0 pushes towards the other pair
+    a, b = on.apply(q, p, f, un), off.apply(q, p, f, un)
+    assert b.active[0, 0]  # the other pair's member binds
+    for x, y in zip(a.arrays()[:4], b.arrays()[:4], strict=True):
+        assert np.array_equal(x, y)
+
+
 def _random_state(rng, B, N, D):
     return rng.uniform(-4, 4, (B, N, D)), rng.normal(0, 10, (B, N, D))
 

@@ -11,6 +11,7 @@ from baselines import make_pair_policy
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.neighbors import NeighborGrid
 from pairflock_env.safety import SafetyFilter, SafetyParams
+from pairflock_env.safety._kernels import _far_radius, _far_terms
 
 
 def _case(rng, B, N, D, spread):
@@ -55,6 +56,38 @@ def test_grid_gives_the_full_scan_bit_for_bit(D, kw):
             for a, b in zip(fast.arrays()[:4], unskipped.arrays()[:4], strict=True):
                 np.testing.assert_array_equal(a, b)
             assert scan.active[:, :].any()
+
+
+@pytest.mark.parametrize("D", [2, 3])
+def test_the_grid_query_shortened_by_the_skip_gives_the_scan_bit_for_bit(D):
+    """A slow, dense swarm and a long sensing radius: each agent's grid query stops where the
+    far-UAV skip takes every UAV at the swarm's largest speed (well inside R_s), and the
+    filter still gives the scan's outputs bit for bit, near the shortened radius too."""
+    rng = np.random.default_rng(40 + D)
+    B, N = 4, 400
+    P = SafetyParams(accel_limit=50.0, dt=0.01, sensing_radius=80.0)
+    agents, partners = np.array([0, 1, 5, 6]), np.array([1, 0, 6, 5])
+    filt = SafetyFilter(P, agents, N, partners)
+    shortened = 0
+    for speed in (0.3, 3.0, 30.0):
+        q = rng.uniform(-40.0, 40.0, (B, N, D))
+        p = rng.normal(0.0, speed, (B, N, D))
+        p[:, agents] *= 10.0  # the paired UAVs close faster
+        f = rng.normal(0.0, 2.0, (B, agents.size, D))
+        un = rng.normal(0.0, 50.0, (B, agents.size, D))
+        grid = NeighborGrid(B, N, D, cell_size=4.0).build(q)
+        scan = filt.apply(q, p, f, un)
+        fast = filt.apply(q, p, f, un, grid=grid)
+        for a, b in zip(scan.arrays(), fast.arrays(), strict=True):
+            np.testing.assert_array_equal(a, b)
+        vmax = np.linalg.norm(p, axis=-1).max(axis=1)
+        for b in range(B):
+            for m, i in enumerate(agents):
+                fn = float(np.linalg.norm(f[b, m]))
+                Wm = (np.linalg.norm(p[b, i]) + vmax[b]) * (1 + 1e-9)
+                r = max(_far_radius(Wm, _far_terms(filt._pr, fn, c)) for c in (False, True))
+                shortened += r < P.sensing_radius
+    assert shortened > 10
 
 
 def test_grid_must_be_built_from_the_positions_given():

@@ -430,19 +430,25 @@ _FAR_ROUND = 64.0 * 2.0**-52
 
 
 @njit(cache=True, nogil=True, _nrt=False, inline="always")  # see _constraints
+def _far_radius(W, far):
+    """The distance from which :func:`_far` skips a UAV closing at relative speed W at
+    most; non-decreasing in W, in floating point too (each step is)."""
+    Ds, T, tau, lam, beta, g, S, epsm, k1, k2, _, k3, R = far
+    S = S + k3 * (R + (T + 2.0 * tau) * W + tau * epsm)  # covers the rounding of sigma_min
+    Q = max(lam * (W - beta) + T * S + epsm, 0.0)
+    Dm = (T + tau) * W + tau * epsm + g * S
+    Y = tau * W + Q * Q * k1 + Dm * k2
+    return Ds + Y * (1.0 + _FAR_REL) + _FAR_ABS
+
+
+@njit(cache=True, nogil=True, _nrt=False, inline="always")  # see _constraints
 def _far(d2, w2, far):
     """Whether a UAV at squared distance d2 and squared relative speed w2 is too far for its
     constraint to bind, i.e. its right-hand side is <= -U whatever the direction, without
     computing the barrier (docs/safety.md, "Skipping far UAVs"). ``far``: :func:`_far_terms`
     of the agent for that kind of UAV; only for a UAV within the sensing radius (the pad for
     rounding is bounded with R_s)."""
-    Ds, T, tau, lam, beta, g, S, epsm, k1, k2, _, k3, R = far
-    W = np.sqrt(w2)
-    S = S + k3 * (R + (T + 2.0 * tau) * W + tau * epsm)  # covers the rounding of sigma_min
-    Q = max(lam * (W - beta) + T * S + epsm, 0.0)
-    Dm = (T + tau) * W + tau * epsm + g * S
-    Y = tau * W + Q * Q * k1 + Dm * k2
-    r = Ds + Y * (1.0 + _FAR_REL) + _FAR_ABS
+    r = _far_radius(np.sqrt(w2), far)
     return d2 >= r * r
 
 
@@ -482,7 +488,7 @@ def _constrain_one(
     if d2 >= R2 and j != mate:
         return K, hmin, True
     kind = far_c if coop[j] else far_o
-    if prune and d2 < R2 and _far(d2, w2, kind):  # the partner beyond R_s: always evaluated
+    if prune and d2 < R2 and _far(d2, w2, kind):  # the partner beyond R2: always evaluated
         return K, hmin, True
     d = np.sqrt(d2)
     for k in range(D):
@@ -516,7 +522,9 @@ def _constrain_one(
 # allocates): the count updates numba adds around a call taking arrays cost several times the
 # call itself (as in pairflock_env.neighbors).
 @njit(cache=True, nogil=True, _nrt=False)
-def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
+def _constraints(
+    b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt, vo=np.inf, vc=np.inf, M=-1
+):
     """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok).
     UAV ``mate`` (the partner; -1: none) is constrained at any distance, the others within
     the sensing radius (squared: R2).
@@ -525,7 +533,11 @@ def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
     sensing radius (``within_radius``, in increasing index order, into ``hits``),
     with the partner merged in at its index: the same UAVs in the same order as the scan of
     all N, so the same constraints (the caller uses it only for a swarm the grid holds whose
-    state is finite and bounded, where the scan would skip exactly the UAVs out of range)."""
+    state is finite and bounded, where the scan would skip exactly the UAVs out of range).
+    With the far-UAV skip on, both look only out to where :func:`_far` would skip every UAV
+    whatever its speed, given ``vo`` and ``vc`` (bounds on the speeds of the unpaired and the
+    filtered UAVs, inf if unknown) and ``M`` (the number of filtered UAVs, -1 if unknown): the
+    UAVs left out are ones the skip would drop, so the constraints are the same."""
     N, D = q.shape[1], q.shape[2]
     Ds, A_o, R2, lam, T, c, U = pr[0], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
     tau = pr[8]
@@ -539,18 +551,26 @@ def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt):
     if not np.isfinite(fn):
         return 0, np.nan, False
     far_o, far_c = _far_terms(pr, fn, False), _far_terms(pr, fn, True)
-    if grid:
-        for k in range(D):
-            pt[k] = q[b, i, k]
-        nc = _with_partner(hits, within_radius(q, b, pt, R2, i, g, hits), mate)
-    else:
-        nc = N
+    w = 0.0
+    for k in range(D):
+        pt[k] = q[b, i, k]
+        w += p[b, i, k] * p[b, i, k]
+    r2 = R2
+    if prune:  # look only out to where the skip takes every UAV: W <= |p_i| + |p_j|
+        wi = np.sqrt(w)
+        r = _far_radius((wi + vo) * (1.0 + 1e-9), far_o)  # the 1e-9: rounding of |p_i - p_j|
+        others = M - 1 - (1 if mate >= 0 and coop[mate] else 0)  # filtered, not i or mate
+        if M < 0 or others > 0:
+            r = max(r, _far_radius((wi + vc) * (1.0 + 1e-9), far_c))
+        if r * r < R2:  # not when a speed is not finite (r is then inf)
+            r2 = r * r
+    nc = _with_partner(hits, within_radius(q, b, pt, r2, i, g, hits), mate) if grid else N
     for t in range(nc):
         j = hits[t] if grid else t
         if j == i:
             continue
         K, hmin, ok = _constrain_one(
-            b, i, j, mate, q, p, f, fn, coop, Ds, A_o, R2, lam, T, c, tau, U, G, rhs,
+            b, i, j, mate, q, p, f, fn, coop, Ds, A_o, r2, lam, T, c, tau, U, G, rhs,
             n, K, hmin, far_o, far_c, prune,
         )  # fmt: skip
         if not ok:
@@ -589,6 +609,26 @@ def _grid_usable(q, p, b, g):
     return True
 
 
+@njit(cache=True, nogil=True, _nrt=False)
+def _speed_bounds(p, b, coop):
+    """The largest speed of swarm b's unpaired UAVs and of its filtered ones (each bounds,
+    with an agent's own speed, the relative speed of that kind of UAV); inf if a velocity is
+    not finite."""
+    vo = 0.0
+    vc = 0.0
+    for j in range(p.shape[1]):
+        s2 = 0.0
+        for k in range(p.shape[2]):
+            s2 += p[b, j, k] * p[b, j, k]
+        if not np.isfinite(s2):
+            return np.inf, np.inf
+        if coop[j]:
+            vc = max(vc, s2)
+        else:
+            vo = max(vo, s2)
+    return np.sqrt(vo), np.sqrt(vc)
+
+
 @njit(cache=True, nogil=True)
 def _filter_kernel(
     q, p, f, un, agents, mates, coop, pr, use_grid, g, u, active, corr, infeas, hmin
@@ -613,10 +653,13 @@ def _filter_kernel(
     marg = np.zeros(max(N, 1))
     for b in range(B):
         grid = use_grid and _grid_usable(q, p, b, g)
+        # only the skip uses the speed bounds
+        vo, vc = _speed_bounds(p, b, coop) if pr[9] != 0.0 else (np.inf, np.inf)
         for m in range(M):
             K, h, ok = _constraints(
-                b, agents[m], mates[m], q, p, f[b, m], coop, pr, G, rhs, nv, grid, g, hits, pt
-            )
+                b, agents[m], mates[m], q, p, f[b, m], coop, pr, G, rhs, nv, grid, g, hits, pt,
+                vo, vc, M,
+            )  # fmt: skip
             hmin[b, m] = h
             for k in range(D):
                 uin[k] = un[b, m, k]
