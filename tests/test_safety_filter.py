@@ -684,6 +684,18 @@ def test_a_fast_member_of_another_pair_is_not_left_out_by_the_shortened_search()
         assert np.array_equal(x, y)
 
 
+def test_barrier_leaves_out_a_partner_the_skip_drops_beyond_the_shortened_search():
+    """A resting swarm: the search stops a few metres out, the partner 20 m away is still
+    taken (at any distance) but, inside the sensing radius, the skip drops it, so it does
+    not count in ``barrier`` either (docs/safety.md, "Skipping far UAVs")."""
+    P = SafetyParams(accel_limit=50.0, sensing_radius=100.0)
+    q = np.array([[[0.0, 0.0], [20.0, 0.0], [0.0, 50.0]]])
+    p = np.zeros((1, 3, 2))
+    zero = np.zeros((1, 2, 2))
+    out = SafetyFilter(P, [0, 1], 3, [1, 0]).apply(q, p, zero, zero)
+    assert np.isinf(out.barrier).all() and not out.active.any()
+
+
 def _random_state(rng, B, N, D):
     return rng.uniform(-4, 4, (B, N, D)), rng.normal(0, 10, (B, N, D))
 

@@ -473,10 +473,12 @@ def _far_terms(pr, fn, coop):
 @njit(cache=True, nogil=True, _nrt=False, inline="always")  # see _constraints
 def _constrain_one(
     b, i, j, mate, q, p, f, fn, coop, Ds, A_o, R2, lam, T, c, tau, U, G, rhs, n, K, hmin,
-    far_o, far_c, prune,
+    far_o, far_c, prune, Rs2,
 ):  # fmt: skip
     """Agent i's constraint against UAV j, appended to G, rhs when it binds; returns (K, hmin,
-    ok), ok False for a non-finite pair (the caller then stops)."""
+    ok), ok False for a non-finite pair (the caller then stops). UAVs other than ``mate``
+    at squared distance >= R2 are left out; ``Rs2`` is the sensing radius squared, within
+    which the far-UAV skip applies."""
     D = q.shape[2]
     d2 = 0.0
     w2 = 0.0
@@ -488,7 +490,7 @@ def _constrain_one(
     if d2 >= R2 and j != mate:
         return K, hmin, True
     kind = far_c if coop[j] else far_o
-    if prune and d2 < R2 and _far(d2, w2, kind):  # the partner beyond R2: always evaluated
+    if prune and d2 < Rs2 and _far(d2, w2, kind):  # the partner beyond R_s: always evaluated
         return K, hmin, True
     d = np.sqrt(d2)
     for k in range(D):
@@ -571,7 +573,7 @@ def _constraints(
             continue
         K, hmin, ok = _constrain_one(
             b, i, j, mate, q, p, f, fn, coop, Ds, A_o, r2, lam, T, c, tau, U, G, rhs,
-            n, K, hmin, far_o, far_c, prune,
+            n, K, hmin, far_o, far_c, prune, R2,
         )  # fmt: skip
         if not ok:
             return 0, np.nan, False
