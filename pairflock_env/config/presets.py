@@ -49,8 +49,8 @@ PRESETS: dict[str, dict[str, Any]] = {
     ),
     # A large swarm (docs/large-swarms.md): 1,000 UAVs with 10 pairs drawn anywhere in the
     # start box (grown with N at the paper's density: +-158 m), the grid search (auto). The
-    # safety filter keeps its 100 m default sensing radius (20 m here until the grid query's
-    # ordering got cheap: the suite's runs are the same with both, docs/large-swarms.md).
+    # safety filter keeps its 100 m default sensing radius (20 m here while 100 m cost
+    # several times more; the suite's runs are the same with both, docs/large-swarms.md).
     "large": dict(
         n_uavs=1000,
         pairs=tuple((2 * k, 2 * k + 1) for k in range(10)),
