@@ -524,9 +524,7 @@ def _constrain_one(
 # allocates): the count updates numba adds around a call taking arrays cost several times the
 # call itself (as in pairflock_env.neighbors).
 @njit(cache=True, nogil=True, _nrt=False)
-def _constraints(
-    b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt, vo=np.inf, vc=np.inf, M=-1
-):
+def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt, vo, vc, M):
     """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok).
     UAV ``mate`` (the partner; -1: none) is constrained at any distance, the others within
     the sensing radius (squared: R2).
@@ -538,7 +536,7 @@ def _constraints(
     state is finite and bounded, where the scan would skip exactly the UAVs out of range).
     With the far-UAV skip on, both look only out to where :func:`_far` would skip every UAV
     whatever its speed, given ``vo`` and ``vc`` (bounds on the speeds of the unpaired and the
-    filtered UAVs, inf if unknown) and ``M`` (the number of filtered UAVs, -1 if unknown): the
+    filtered UAVs, inf if unknown) and ``M`` (the number of filtered UAVs): the
     UAVs left out are ones the skip would drop, so the constraints are the same."""
     N, D = q.shape[1], q.shape[2]
     Ds, A_o, R2, lam, T, c, U = pr[0], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
@@ -562,7 +560,7 @@ def _constraints(
         wi = np.sqrt(w)
         r = _far_radius((wi + vo) * (1.0 + 1e-9), far_o)  # the 1e-9: rounding of |p_i - p_j|
         others = M - 1 - (1 if mate >= 0 and coop[mate] else 0)  # filtered, not i or mate
-        if M < 0 or others > 0:
+        if others > 0:
             r = max(r, _far_radius((wi + vc) * (1.0 + 1e-9), far_c))
         if r * r < R2:  # not when a speed is not finite (r is then inf)
             r2 = r * r
