@@ -18,6 +18,7 @@ EXPECTED = {
     "pairflock-quadrotor": "baselines.experiments.quadrotor_experiment:main",
     "pairflock-quadrotor-invariants": "baselines.experiments.quadrotor_invariants:main",
     "pairflock-quadrotor-compare": "baselines.experiments.quadrotor_compare:main",
+    "pairflock-safety-compare": "baselines.experiments.safety_compare:main",
     "pairflock-train": "train.cli:main",
     "pairflock-evaluate": "train.evaluate:main",
     "pairflock-train-eval": "train.evaluate:main",

@@ -40,6 +40,7 @@ TOP_LEVEL = {
     "quadrotor_experiment": "experiments",
     "quadrotor_invariants": "experiments",
     "quadrotor_compare": "experiments",
+    "safety_compare": "experiments",
 }
 
 

@@ -33,6 +33,7 @@ __all__ = [
     "dumps_stable",
     "format_value",
     "json_rows",
+    "load_results",
     "result_folder",
     "run_record",
     "write_csv",
@@ -110,6 +111,19 @@ def write_csv(
     for r in rows:
         w.writerow({k: format_value(r.get(k)) for k in columns})
     return atomic_write_text(path, buf.getvalue())
+
+
+def load_results(folders: Sequence[str | Path], flag: str) -> list[dict[str, str]]:
+    """The ``results.csv`` rows of every folder, pooled; ``SystemExit`` naming ``flag`` (the
+    command-line option the folders came from) and the path when a folder has none."""
+    rows: list[dict[str, str]] = []
+    for folder in folders:
+        path = Path(folder) / "results.csv"
+        if not path.is_file():
+            raise SystemExit(f"{flag}: {str(folder)!r} is invalid: it has no results.csv")
+        with path.open(newline="") as fh:
+            rows += list(csv.DictReader(fh))
+    return rows
 
 
 def _json_default(o: Any) -> Any:

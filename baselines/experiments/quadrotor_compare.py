@@ -14,27 +14,14 @@ exact McNemar test), and the median paired change of each criterion's metric wit
 from __future__ import annotations
 
 import argparse
-import csv
 import sys
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
-__all__ = ["build_parser", "load_rows", "main"]
+from baselines.evaluation.io import load_results
 
-
-def load_rows(folders: Sequence[str | Path], flag: str) -> list[dict[str, str]]:
-    """The ``results.csv`` rows of every folder; ``SystemExit`` naming ``flag`` and the path
-    when a folder has none."""
-    rows: list[dict[str, str]] = []
-    for folder in folders:
-        path = Path(folder) / "results.csv"
-        if not path.is_file():
-            raise SystemExit(f"{flag}: {str(folder)!r} is invalid: it has no results.csv")
-        with path.open(newline="") as fh:
-            rows += list(csv.DictReader(fh))
-    return rows
+__all__ = ["build_parser", "main"]
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -66,8 +53,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     if args.bootstrap < 1:
         ap.error(f"--bootstrap {args.bootstrap} is invalid: must be >= 1")
-    rows_a = load_rows(args.runs, "runs")
-    rows_b = load_rows(args.against, "--against")
+    rows_a = load_results(args.runs, "runs")
+    rows_b = load_results(args.against, "--against")
     try:
         res = compare_runs(
             rows_a,

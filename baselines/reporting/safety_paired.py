@@ -1,0 +1,241 @@
+"""What the safety filter changes for a controller, run by run: the filter-off and filter-on
+runs of a benchmark paired by (scenario, seed, pair).
+
+The safety table (:mod:`.safety_table`) gives each side's median and worst run. Those are two
+separate samples: where the filter acts it moves the pair onto another trajectory, and a
+controller's steady error on that trajectory can be larger or smaller than before. This module
+pairs the runs and reports, per controller and scenario and for each metric, the change of the
+median and of the worst run, the change of the 90th percentile and the median of the per-run
+ratio on/off (each with a seeded bootstrap 95 % CI over the runs), and how many runs got more
+than 10 % worse, more than 10 % better, or stayed identical (``python -m
+baselines.safety_compare``, docs/safety.md "Run by run").
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from pairflock_env.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
+
+__all__ = ["PAIRED_METRICS", "compare_filter", "paired_filter_lines"]
+
+Row = Mapping[str, Any]
+
+#: the metrics compared by default: the issue's two costs of the filter for a controller
+PAIRED_METRICS = ("ss_mean_error", "band_time")
+#: columns that identify a run within a group, or that are the compared axis itself
+_RUN_COLUMNS = frozenset({"scenario", "safety_filter", "seed", "pair"})
+#: per-run columns that are results, not settings
+_RESULT_COLUMNS = (
+    frozenset(METRIC_DOCS)
+    | frozenset(SAFETY_METRIC_DOCS)
+    | {
+        "clipped_steps",
+        "steps_run",
+        "turn_peak_since_filter",
+    }
+)
+#: a run counts as worse (better) when on/off exceeds 1 + this (falls below 1 - this)
+CHANGE = 0.10
+
+
+def _settings(row: Row) -> set[str]:
+    return {k for k in row if k not in _RUN_COLUMNS and k not in _RESULT_COLUMNS}
+
+
+def _value(row: Row, metric: str) -> float:
+    """The metric as a float; empty, missing or ``never`` is NaN (e.g. a band never entered)."""
+    v = row.get(metric, "")
+    if v is None or v == "":
+        return math.nan
+    try:
+        return float(v)
+    except ValueError:
+        return math.nan
+
+
+def _side(rows: Sequence[Row], flt: str, keys: Sequence[str], label: str):
+    """{(group key, variant): {(seed, pair): row}} of the rows with ``safety_filter == flt``."""
+    out: dict[tuple, dict[tuple[int, int], Row]] = {}
+    for r in rows:
+        if str(r.get("safety_filter", "none")) != flt:
+            continue
+        group = tuple(str(r[k]) for k in keys)
+        variant = tuple(sorted((k, str(r[k])) for k in _settings(r) - set(keys)))
+        run = (int(float(r["seed"])), int(float(r.get("pair", 0))))
+        runs = out.setdefault((group, variant), {})
+        if run in runs:
+            raise ValueError(
+                f"run {label} has seed {run[0]}, pair {run[1]} twice in the group "
+                f"{dict(zip(keys, group, strict=True))} {dict(variant)}: pool folders of "
+                "distinct seeds"
+            )
+        runs[run] = r
+    return out
+
+
+def _ratio_stats(a: np.ndarray, b: np.ndarray, rng: np.random.Generator, n_boot: int):
+    """(90th-percentile change, its CI), (median per-run ratio, its CI) of finite pairs."""
+    ok = np.isfinite(a) & np.isfinite(b) & (a > 0)
+    a, b = a[ok], b[ok]
+    if a.size == 0:
+        nan = (math.nan, math.nan, math.nan)
+        return nan, nan
+    idx = rng.integers(0, a.size, size=(n_boot, a.size))
+    q_a, q_b = np.percentile(a[idx], 90, axis=1), np.percentile(b[idx], 90, axis=1)
+    tail = q_b / q_a - 1.0
+    ratio = b / a
+    med = np.median(ratio[idx], axis=1)
+    p90 = float(np.percentile(b, 90) / np.percentile(a, 90) - 1.0)
+    return (
+        (p90, *map(float, np.percentile(tail, [2.5, 97.5]))),
+        (float(np.median(ratio)), *map(float, np.percentile(med, [2.5, 97.5]))),
+    )
+
+
+def _change(a: float, b: float) -> float:
+    return b / a - 1.0 if a > 0 and math.isfinite(a) and math.isfinite(b) else math.nan
+
+
+def compare_filter(
+    rows_a: Sequence[Row],
+    rows_b: Sequence[Row] | None = None,
+    *,
+    metrics: Sequence[str] = PAIRED_METRICS,
+    policies: Sequence[str] | None = None,
+    rng: np.random.Generator,
+    n_boot: int = 2000,
+) -> list[dict[str, Any]]:
+    """Pair the filter-off runs of ``rows_a`` with the filter-on runs of ``rows_b`` (default:
+    ``rows_a`` too, i.e. a benchmark that swept ``safety_filter``).
+
+    Runs pair on every setting column the two sides share (policy, N, init, ...) and on
+    (seed, pair). Settings that only ``rows_b`` has (e.g. a swept ``safety_other_accel``) make
+    separate *variants*, each compared with the same filter-off runs. Returns one dict per
+    (group, variant, metric): ``group`` {column: value}, ``variant`` {column: value},
+    ``metric``, ``runs`` (paired), ``a``/``b`` the sides' (median, worst, runs with no
+    value), ``median_change``, ``worst_change``, ``p90_change`` (value, CI low, high),
+    ``ratio`` (median per-run on/off, CI low, high), ``worse``/``better`` (runs changed by
+    more than 10 %) and ``identical`` (runs whose value is the same bit for bit).
+
+    Raises ``ValueError`` naming what is missing when nothing pairs, ``TypeError`` for a
+    ``rng`` that is not a ``numpy.random.Generator``.
+    """
+    if not isinstance(rng, np.random.Generator):
+        raise TypeError(f"rng={rng!r} is invalid: must be a numpy.random.Generator")
+    if isinstance(n_boot, bool) or not isinstance(n_boot, int) or n_boot < 1:
+        raise ValueError(f"n_boot={n_boot!r} is invalid: must be an integer >= 1")
+    rows_b = rows_a if rows_b is None else rows_b
+    if not rows_a or not rows_b:
+        raise ValueError("nothing to compare: a side has no rows")
+    for m in metrics:
+        if any(m not in r for r in (rows_a[0], rows_b[0])):
+            raise ValueError(
+                f"metric {m!r} is not a column of both runs; they have "
+                f"{sorted(set(rows_a[0]) & set(rows_b[0]) & _RESULT_COLUMNS)}"
+            )
+    if policies is not None:
+        wanted = {str(p) for p in policies}
+        rows_a = [r for r in rows_a if str(r["policy"]) in wanted]
+        rows_b = [r for r in rows_b if str(r["policy"]) in wanted]
+    keys = ["policy", *sorted((_settings(rows_a[0]) & _settings(rows_b[0])) - {"policy"})]
+    side_a = _side(rows_a, "none", keys, "A")
+    side_b = _side(rows_b, "cbf", keys, "B")
+    off = {g: runs for (g, _), runs in side_a.items()}
+    out: list[dict[str, Any]] = []
+    for (group, variant), runs_b in side_b.items():
+        runs_a = off.get(group)
+        if runs_a is None:
+            continue
+        shared = sorted(set(runs_a) & set(runs_b))
+        if not shared:
+            continue
+        for m in metrics:
+            a = np.array([_value(runs_a[k], m) for k in shared])
+            b = np.array([_value(runs_b[k], m) for k in shared])
+            fa, fb = a[np.isfinite(a)], b[np.isfinite(b)]
+            sides = []
+            for f, v in ((fa, a), (fb, b)):
+                stats = (float(np.median(f)), float(f.max())) if f.size else (math.nan,) * 2
+                sides.append((*stats, int(v.size - f.size)))
+            both = np.isfinite(a) & np.isfinite(b)
+            p90, ratio = _ratio_stats(a, b, rng, n_boot)
+            out.append(
+                {
+                    "group": dict(zip(keys, group, strict=True)),
+                    "variant": dict(variant),
+                    "metric": m,
+                    "runs": len(shared),
+                    "a": sides[0],
+                    "b": sides[1],
+                    "median_change": _change(sides[0][0], sides[1][0]),
+                    "worst_change": _change(sides[0][1], sides[1][1]),
+                    "p90_change": p90,
+                    "ratio": ratio,
+                    "worse": int(np.sum(both & (b > (1 + CHANGE) * a))),
+                    "better": int(np.sum(both & (b < (1 - CHANGE) * a))),
+                    "identical": int(np.sum((a == b) | (np.isnan(a) & np.isnan(b)))),
+                }
+            )
+    if not out:
+        raise ValueError(
+            "no filter-off run (safety_filter=none) of run A pairs with a filter-on run "
+            "(safety_filter=cbf) of run B: they share no setting group and seed"
+        )
+    return out
+
+
+def _pct(x: float) -> str:
+    return "-" if not math.isfinite(x) else f"{100 * x:+.1f} %"
+
+
+def _num(x: float) -> str:
+    return "never" if not math.isfinite(x) else f"{x:.3g}"
+
+
+def paired_filter_lines(result: Sequence[Mapping[str, Any]]) -> list[str]:
+    """A markdown table of :func:`compare_filter`'s result; leading columns only for the
+    settings that differ between its lines."""
+    lead = [
+        k
+        for k in result[0]["group"]
+        if k == "policy" or len({str(r["group"][k]) for r in result}) > 1
+    ]
+    variants = any(r["variant"] for r in result)
+    head = [*lead, *(["variant"] if variants else []), "metric", "runs"]
+    head += [
+        "off: median / worst",
+        "on: median / worst",
+        "median change",
+        "worst change",
+        "90th pct change [95 % CI]",
+        "per-run on/off, median [95 % CI]",
+        "runs > +10 % / < -10 % / identical",
+    ]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in result:
+        cells = [str(r["group"][k]) for k in lead]
+        if variants:
+            cells.append(", ".join(f"{k}={v}" for k, v in r["variant"].items()) or "-")
+        p, plo, phi = r["p90_change"]
+        q, qlo, qhi = r["ratio"]
+        sides = []
+        for med, worst, never in (r["a"], r["b"]):
+            extra = f" (never in {never})" if never else ""
+            sides.append(f"{_num(med)} / {_num(worst)}{extra}")
+        cells += [
+            r["metric"],
+            str(r["runs"]),
+            *sides,
+            _pct(r["median_change"]),
+            _pct(r["worst_change"]),
+            f"{_pct(p)} [{_pct(plo)}, {_pct(phi)}]",
+            f"{q:.3f} [{qlo:.3f}, {qhi:.3f}]" if math.isfinite(q) else "-",
+            f"{r['worse']} / {r['better']} / {r['identical']}",
+        ]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
