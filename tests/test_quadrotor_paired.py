@@ -73,12 +73,15 @@ def test_compare_counts_discordant_runs_and_pairs_by_seed():
     assert (oa, ob) == (0, 3) and p == pytest.approx(binomtest(0, 3, 0.5).pvalue)
     assert res["discordant"]["band_entry"] == (0, 0, 1.0)
     assert res["all_pass"] == (24, 22)
+    # any criterion: A fails seed 5 only, B fails 10-12 only
+    assert res["all_discordant"] == (1, 3, pytest.approx(binomtest(1, 4, 0.5).pvalue))
     med, lo, hi = res["change"]["turn_peak_error"]
     base = C.turn_peak_max / 2 + 1e-3 * np.arange(5, 30)
     d = np.where(np.isin(np.arange(5, 30), [10, 11, 12]), 0.9, base) - base
     assert med == pytest.approx(np.median(d)) and lo <= med <= hi
     text = "\n".join(paired_lines(res, "off", "on"))
     assert "| turn_peak | 0 | 3 | 0 | 3 |" in text and "25 seeds in both runs" in text
+    assert "| any criterion | 1 | 3 | 1 | 3 | 0.625 |" in text
     # the same generator seed gives the same intervals
     again = compare_runs(a, b, "smc", "smc_b", rng=np.random.default_rng(0), n_boot=200)
     assert again["change"] == res["change"]

@@ -56,7 +56,8 @@ def compare_runs(
     in ``rows_b``) on the quadrotor seeds both have.
 
     Returns ``seeds`` (the shared seeds), ``misses`` {criterion: (A, B)} runs that miss,
-    ``all_pass`` (A, B) runs that meet every criterion both runs have, ``discordant``
+    ``all_pass`` (A, B) runs that meet every criterion both runs have, ``all_discordant``
+    (runs that miss one of them in A only, in B only, exact McNemar p), ``discordant``
     {criterion: (A only, B only, exact two-sided McNemar p)} and ``change`` {metric: (median
     of B - A, bootstrap 95 % CI low, high)} over the seeds, resampled with ``rng``.
     Raises ``ValueError`` naming what is missing when the runs share no seed.
@@ -94,6 +95,8 @@ def compare_runs(
     every_a = np.all([a[k][ia] for k in keys], axis=0)
     every_b = np.all([b[k][ib] for k in keys], axis=0)
     out["all_pass"] = (int(every_a.sum()), int(every_b.sum()))
+    only_a, only_b = int((~every_a & every_b).sum()), int((every_a & ~every_b).sum())
+    out["all_discordant"] = (only_a, only_b, mcnemar_exact(only_a, only_b))
     metrics = dict.fromkeys(CRITERIA_KEYS[k] for k in keys if k != "no_crash")
     for m in metrics:
         d = _metric(rows_b, policy_b, m, seeds) - _metric(rows_a, policy_a, m, seeds)
@@ -162,6 +165,8 @@ def paired_lines(result: Mapping[str, Any], label_a: str = "A", label_b: str = "
         oa, ob, p = result["discordant"][k]
         lines.append(f"| {k} | {ma} | {mb} | {oa} | {ob} | {p:.3g} |")
     pa, pb = result["all_pass"]
+    oa, ob, p = result["all_discordant"]
+    lines += [f"| any criterion | {n - pa} | {n - pb} | {oa} | {ob} | {p:.3g} |"]
     lines += [f"| runs meeting all | {pa} | {pb} | | | |", ""]
     lines += [
         f"Paired change {label_b} - {label_a} of each criterion's metric (median over seeds, "
