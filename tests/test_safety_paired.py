@@ -165,3 +165,13 @@ def test_cli_pools_folders_and_names_bad_input(tmp_path):
     assert bad.returncode != 0 and "metric 'steady' is not a column" in bad.stderr
     neg = subprocess.run([*cmd, str(tmp_path / "a"), "--bootstrap", "0"], capture_output=True)
     assert neg.returncode == 2 and b"--bootstrap 0 is invalid" in neg.stderr
+
+
+def test_a_lines_interval_does_not_depend_on_the_other_lines():
+    rng_rows = np.random.default_rng(7)
+    off = rng_rows.uniform(0.05, 0.15, 40)
+    rows = _suite(off=off, on=off * rng_rows.uniform(0.8, 1.3, 40))
+    rows += _suite(policy="proportional", off=off, on=off * rng_rows.uniform(0.8, 1.3, 40))
+    both = compare_filter(rows, rng=np.random.default_rng(1))  # smc's lines resample first
+    one = compare_filter(rows, rng=np.random.default_rng(1), policies=["proportional"])
+    assert [r for r in both if r["group"]["policy"] == "proportional"] == one

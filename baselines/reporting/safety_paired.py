@@ -14,6 +14,7 @@ baselines.safety_compare``, docs/safety.md "Run by run").
 from __future__ import annotations
 
 import math
+import zlib
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -142,12 +143,19 @@ def compare_filter(
         wanted = {str(p) for p in policies}
         rows_a = [r for r in rows_a if str(r["policy"]) in wanted]
         rows_b = [r for r in rows_b if str(r["policy"]) in wanted]
-    keys = ["policy", *sorted((_settings(rows_a[0]) & _settings(rows_b[0])) - {"policy"})]
+    common = _settings(rows_a[0]) & _settings(rows_b[0])
+    keys = ["policy", *(k for k in rows_a[0] if k in common and k != "policy")]
     side_a = _side(rows_a, "none", keys, "A")
     side_b = _side(rows_b, "cbf", keys, "B")
     off = {g: runs for (g, _), runs in side_a.items()}
+    # controllers in order of appearance, each with its settings in order (as the table)
+    base = int(rng.integers(2**63))  # each line resamples with its own stream, so that its
+    # interval does not depend on which other lines are compared
+    first = {p: i for i, p in reversed(list(enumerate(g[0] for g, _ in side_b)))}
+    order = sorted(side_b, key=lambda gv: first[gv[0][0]])  # stable: settings keep order
     out: list[dict[str, Any]] = []
-    for (group, variant), runs_b in side_b.items():
+    for group, variant in order:
+        runs_b = side_b[group, variant]
         runs_a = off.get(group)
         if runs_a is None:
             continue
@@ -163,7 +171,8 @@ def compare_filter(
                 stats = (float(np.median(f)), float(f.max())) if f.size else (math.nan,) * 2
                 sides.append((*stats, int(v.size - f.size)))
             both = np.isfinite(a) & np.isfinite(b)
-            p90, ratio = _ratio_stats(a, b, rng, n_boot)
+            line = zlib.crc32(repr((group, variant, m)).encode())
+            p90, ratio = _ratio_stats(a, b, np.random.default_rng([base, line]), n_boot)
             out.append(
                 {
                     "group": dict(zip(keys, group, strict=True)),
