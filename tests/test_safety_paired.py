@@ -97,6 +97,14 @@ def test_a_setting_swept_on_the_filter_side_only_makes_variants():
     assert "| safety_other_accel=40 |" in "\n".join(paired_filter_lines(res))
 
 
+def test_two_filter_off_runs_compare_as_a_placebo():
+    off = [r for r in _suite() if r["safety_filter"] == "none"]
+    moved = [_row("smc", 50, "none", s, e * 1.2, disturbance_std=1) for s, e in enumerate(OFF)]
+    res = compare_filter(off, moved, filters=("none", "none"), rng=np.random.default_rng(0))
+    assert res[0]["variant"] == {"disturbance_std": "1"} and res[0]["worse"] == 5
+    assert res[0]["median_change"] == pytest.approx(0.2)
+
+
 def test_runs_pair_only_within_their_controller_and_shared_seeds():
     rows = _suite() + _suite(policy="proportional", on=OFF * 2, seeds=range(3, 8))
     rows += [_row("smc", 50, "cbf", 99, 5.0)]  # a filter-on seed with no filter-off partner
@@ -127,7 +135,9 @@ def test_bad_input_is_refused_clearly():
         compare_filter(rows, rng=rng, metrics=["steady"])
     with pytest.raises(ValueError, match="seed 2, pair 0 twice"):
         compare_filter([*rows, rows[2]], rng=rng)
-    with pytest.raises(ValueError, match="no filter-off run"):
+    with pytest.raises(ValueError, match=r"filters=\('none', 'on'\) is invalid"):
+        compare_filter(rows, rng=rng, filters=("none", "on"))
+    with pytest.raises(ValueError, match="no run of A with safety_filter=none pairs"):
         compare_filter([r for r in rows if r["safety_filter"] == "cbf"], rng=rng)
     with pytest.raises(ValueError, match="no rows"):
         compare_filter([], rng=rng)

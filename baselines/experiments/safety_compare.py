@@ -51,6 +51,15 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument(
         "--metrics", nargs="+", default=list(PAIRED_METRICS), help="per-run result columns"
     )
+    ap.add_argument(
+        "--filters",
+        nargs=2,
+        default=["none", "cbf"],
+        choices=["none", "cbf"],
+        metavar=("A", "B"),
+        help="safety_filter of each side; 'none none' with --against compares two "
+        "filter-off runs (e.g. one with --set disturbance_std=1 as a placebo)",
+    )
     ap.add_argument("--bootstrap", type=int, default=2000, help="bootstrap resamples")
     ap.add_argument("--seed", type=int, default=0, help="seed of the bootstrap's generator")
     return ap
@@ -71,6 +80,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             rows_b,
             metrics=args.metrics,
             policies=args.policy,
+            filters=tuple(args.filters),
             rng=np.random.default_rng(args.seed),
             n_boot=args.bootstrap,
         )

@@ -108,11 +108,16 @@ def compare_filter(
     *,
     metrics: Sequence[str] = PAIRED_METRICS,
     policies: Sequence[str] | None = None,
+    filters: tuple[str, str] = ("none", "cbf"),
     rng: np.random.Generator,
     n_boot: int = 2000,
 ) -> list[dict[str, Any]]:
     """Pair the filter-off runs of ``rows_a`` with the filter-on runs of ``rows_b`` (default:
     ``rows_a`` too, i.e. a benchmark that swept ``safety_filter``).
+
+    ``filters`` are the ``safety_filter`` values of the two sides: ``("none", "none")``
+    compares two filter-off runs, e.g. against a small random disturbance (a placebo that
+    moves the trajectories without avoiding anything).
 
     Runs pair on every setting column the two sides share (policy, N, init, ...) and on
     (seed, pair). Settings that only ``rows_b`` has (e.g. a swept ``safety_other_accel``) make
@@ -131,6 +136,8 @@ def compare_filter(
     if isinstance(n_boot, bool) or not isinstance(n_boot, int) or n_boot < 1:
         raise ValueError(f"n_boot={n_boot!r} is invalid: must be an integer >= 1")
     rows_b = rows_a if rows_b is None else rows_b
+    if len(filters) != 2 or any(f not in ("none", "cbf") for f in filters):
+        raise ValueError(f"filters={filters!r} is invalid: must be two of 'none', 'cbf'")
     if not rows_a or not rows_b:
         raise ValueError("nothing to compare: a side has no rows")
     for m in metrics:
@@ -145,8 +152,8 @@ def compare_filter(
         rows_b = [r for r in rows_b if str(r["policy"]) in wanted]
     common = _settings(rows_a[0]) & _settings(rows_b[0])
     keys = ["policy", *(k for k in rows_a[0] if k in common and k != "policy")]
-    side_a = _side(rows_a, "none", keys, "A")
-    side_b = _side(rows_b, "cbf", keys, "B")
+    side_a = _side(rows_a, filters[0], keys, "A")
+    side_b = _side(rows_b, filters[1], keys, "B")
     off = {g: runs for (g, _), runs in side_a.items()}
     # controllers in order of appearance, each with its settings in order (as the table)
     base = int(rng.integers(2**63))  # each line resamples with its own stream, so that its
@@ -192,8 +199,8 @@ def compare_filter(
             )
     if not out:
         raise ValueError(
-            "no filter-off run (safety_filter=none) of run A pairs with a filter-on run "
-            "(safety_filter=cbf) of run B: they share no setting group and seed"
+            f"no run of A with safety_filter={filters[0]} pairs with a run of B with "
+            f"safety_filter={filters[1]}: they share no setting group and seed"
         )
     return out
 
