@@ -4,13 +4,13 @@ discordant runs and the exact McNemar p are counted right, and bad input is refu
 
 from __future__ import annotations
 
-import csv
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 from quadrotor_rows import quad_row
+from result_files import write_results
 from scipy.stats import binomtest
 
 from baselines.reporting.criteria import QUADROTOR, check_quadrotor
@@ -128,18 +128,10 @@ def test_compare_refuses_bad_input(kwargs, exc, match):
         compare_runs(a, a + _runs(set(), set(), seeds=[3]), rng=np.random.default_rng(0))
 
 
-def _write(folder, rows):
-    folder.mkdir(parents=True)
-    with (folder / "results.csv").open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-
-
 def test_cli_pools_folders_and_names_a_folder_without_results(tmp_path):
-    _write(tmp_path / "off1", _runs({1}, {2}, seeds=range(0, 10)))
-    _write(tmp_path / "off2", _runs(set(), {12}, seeds=range(10, 20)))
-    _write(tmp_path / "on", _runs({1, 15}, set(), seeds=range(20)))
+    write_results(tmp_path / "off1", _runs({1}, {2}, seeds=range(0, 10)))
+    write_results(tmp_path / "off2", _runs(set(), {12}, seeds=range(10, 20)))
+    write_results(tmp_path / "on", _runs({1, 15}, set(), seeds=range(20)))
     cmd = [sys.executable, "-m", "baselines.quadrotor_compare"]
     args = [str(tmp_path / "off1"), str(tmp_path / "off2"), "--against", str(tmp_path / "on")]
     out = subprocess.run(

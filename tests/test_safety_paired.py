@@ -5,12 +5,12 @@ clearly."""
 
 from __future__ import annotations
 
-import csv
 import subprocess
 import sys
 
 import numpy as np
 import pytest
+from result_files import write_results
 
 from baselines.reporting.safety_paired import compare_filter, paired_filter_lines
 
@@ -143,18 +143,10 @@ def test_bad_input_is_refused_clearly():
         compare_filter([], rng=rng)
 
 
-def _write(folder, rows):
-    folder.mkdir(parents=True)
-    with (folder / "results.csv").open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-
-
 def test_cli_pools_folders_and_names_bad_input(tmp_path):
     rows = _suite()
-    _write(tmp_path / "a", rows[:3] + rows[5:8])
-    _write(tmp_path / "b", rows[3:5] + rows[8:])
+    write_results(tmp_path / "a", rows[:3] + rows[5:8])
+    write_results(tmp_path / "b", rows[3:5] + rows[8:])
     cmd = [sys.executable, "-m", "baselines.safety_compare"]
     out = subprocess.run(
         [*cmd, str(tmp_path / "a"), str(tmp_path / "b"), "--metrics", "ss_mean_error"],

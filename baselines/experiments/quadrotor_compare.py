@@ -17,9 +17,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-import numpy as np
-
-from baselines.evaluation.io import load_results
+from ._paired_cli import add_bootstrap_options, run_paired
 
 __all__ = ["build_parser", "main"]
 
@@ -41,33 +39,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     ap.add_argument("--label", default="A", help="name of run A in the tables")
     ap.add_argument("--against-label", default="B", help="name of run B in the tables")
-    ap.add_argument("--bootstrap", type=int, default=4000, help="bootstrap resamples")
-    ap.add_argument("--seed", type=int, default=0, help="seed of the bootstrap's generator")
+    add_bootstrap_options(ap, 4000)
     return ap
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    ap = build_parser()
-    args = ap.parse_args(argv)
-    from baselines.reporting.quadrotor_paired import compare_runs, paired_lines
+    def compare(args, rows_a, rows_b, rng):
+        from baselines.reporting.quadrotor_paired import compare_runs, paired_lines
 
-    if args.bootstrap < 1:
-        ap.error(f"--bootstrap {args.bootstrap} is invalid: must be >= 1")
-    rows_a = load_results(args.runs, "runs")
-    rows_b = load_results(args.against, "--against")
-    try:
         res = compare_runs(
-            rows_a,
-            rows_b,
-            args.policy,
-            args.against_policy,
-            rng=np.random.default_rng(args.seed),
-            n_boot=args.bootstrap,
+            rows_a, rows_b, args.policy, args.against_policy, rng=rng, n_boot=args.bootstrap
         )
-    except ValueError as exc:
-        raise SystemExit(str(exc)) from None
-    print("\n".join(paired_lines(res, args.label, args.against_label)))
-    return 0
+        return paired_lines(res, args.label, args.against_label)
+
+    return run_paired(build_parser(), argv, compare)
 
 
 if __name__ == "__main__":

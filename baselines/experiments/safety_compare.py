@@ -20,9 +20,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-import numpy as np
-
-from baselines.evaluation.io import load_results
+from ._paired_cli import add_bootstrap_options, run_paired
 
 __all__ = ["build_parser", "main"]
 
@@ -60,34 +58,26 @@ def build_parser() -> argparse.ArgumentParser:
         help="safety_filter of each side; 'none none' with --against compares two "
         "filter-off runs (e.g. one with --set disturbance_std=1 as a placebo)",
     )
-    ap.add_argument("--bootstrap", type=int, default=2000, help="bootstrap resamples")
-    ap.add_argument("--seed", type=int, default=0, help="seed of the bootstrap's generator")
+    add_bootstrap_options(ap, 2000)
     return ap
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    ap = build_parser()
-    args = ap.parse_args(argv)
-    from baselines.reporting.safety_paired import compare_filter, paired_filter_lines
+    def compare(args, rows_a, rows_b, rng):
+        from baselines.reporting.safety_paired import compare_filter, paired_filter_lines
 
-    if args.bootstrap < 1:
-        ap.error(f"--bootstrap {args.bootstrap} is invalid: must be >= 1")
-    rows_a = load_results(args.runs, "runs")
-    rows_b = None if args.against is None else load_results(args.against, "--against")
-    try:
         res = compare_filter(
             rows_a,
             rows_b,
             metrics=args.metrics,
             policies=args.policy,
             filters=tuple(args.filters),
-            rng=np.random.default_rng(args.seed),
+            rng=rng,
             n_boot=args.bootstrap,
         )
-    except ValueError as exc:
-        raise SystemExit(str(exc)) from None
-    print("\n".join(paired_filter_lines(res)))
-    return 0
+        return paired_filter_lines(res)
+
+    return run_paired(build_parser(), argv, compare)
 
 
 if __name__ == "__main__":
