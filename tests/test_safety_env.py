@@ -285,6 +285,14 @@ def test_benchmark_safety_suite_runs_filter_off_and_on(tmp_path):
     summary = (out / "summary.md").read_text()
     assert "## Safety filter" in summary and "runs >= safety_distance" in summary
     assert "runs >= safety_distance" in done.stdout
+    # the paired comparison reads the benchmark's own columns: one smc run off and on
+    paired = subprocess.run(
+        [sys.executable, "-m", "baselines.safety_compare", str(out), "--bootstrap", "10"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    assert "| smc | ss_mean_error | 1 |" in paired and "| smc | band_time | 1 |" in paired
 
     from baselines.reporting.safety_figure import closest_pass_figure, read_rows
 
