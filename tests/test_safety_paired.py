@@ -155,6 +155,14 @@ def test_cli_pools_folders_and_names_bad_input(tmp_path):
         check=True,
     ).stdout
     assert "| smc | ss_mean_error | 5 |" in out and "| 2 / 1 / 1 |" in out
+    png = tmp_path / "paired.png"
+    drawn = subprocess.run(
+        [*cmd, str(tmp_path / "a"), str(tmp_path / "b"), "--figure", str(png)],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    assert f"wrote {png}" in drawn and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     off = subprocess.run(
         [*cmd, str(tmp_path / "a"), "--against", str(tmp_path / "nowhere")],
         capture_output=True,

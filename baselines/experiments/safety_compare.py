@@ -11,7 +11,8 @@ share (controller, N, start, ...) and on (seed, pair); a setting only ``--agains
 (e.g. ``--set safety_other_accel=40,100``) gives one line per value. For each metric it prints
 the median and worst run of each side and their change, the change of the 90th percentile
 and the median per-run ratio on/off (each with a seeded bootstrap 95 % CI: ``--seed``), and
-the runs that got more than 10 % worse, more than 10 % better, or stayed identical.
+the runs that got more than 10 % worse, more than 10 % better, or stayed identical;
+``--figure PNG`` draws every paired run, off against on.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 
 from ._paired_cli import add_bootstrap_options, run_paired
 
@@ -58,13 +60,24 @@ def build_parser() -> argparse.ArgumentParser:
         help="safety_filter of each side; 'none none' with --against compares two "
         "filter-off runs (e.g. one with --set disturbance_std=1 as a placebo)",
     )
+    ap.add_argument(
+        "--figure",
+        type=Path,
+        default=None,
+        metavar="PNG",
+        help="also draw every paired run, off against on, one panel per controller and metric",
+    )
     add_bootstrap_options(ap, 2000)
     return ap
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     def compare(args, rows_a, rows_b, rng):
-        from baselines.reporting.safety_paired import compare_filter, paired_filter_lines
+        from baselines.reporting.safety_paired import (
+            compare_filter,
+            paired_figure,
+            paired_filter_lines,
+        )
 
         res = compare_filter(
             rows_a,
@@ -75,7 +88,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             rng=rng,
             n_boot=args.bootstrap,
         )
-        return paired_filter_lines(res)
+        lines = paired_filter_lines(res)
+        if args.figure is not None:
+            lines.append(f"\nwrote {paired_figure(res, args.figure)}")
+        return lines
 
     return run_paired(build_parser(), argv, compare)
 

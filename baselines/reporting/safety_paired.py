@@ -22,7 +22,7 @@ import numpy as np
 
 from pairflock_env.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
 
-__all__ = ["PAIRED_METRICS", "compare_filter", "paired_filter_lines"]
+__all__ = ["PAIRED_METRICS", "compare_filter", "paired_figure", "paired_filter_lines"]
 
 Row = Mapping[str, Any]
 
@@ -126,7 +126,8 @@ def compare_filter(
     ``metric``, ``runs`` (paired), ``a``/``b`` the sides' (median, worst, runs with no
     value), ``median_change``, ``worst_change``, ``p90_change`` (value, CI low, high),
     ``ratio`` (median per-run on/off, CI low, high), ``worse``/``better`` (runs changed by
-    more than 10 %) and ``identical`` (runs whose value is the same bit for bit).
+    more than 10 %), ``identical`` (runs whose value is the same bit for bit) and ``values``
+    (the paired runs' values, off and on, NaN where there is none).
 
     Raises ``ValueError`` naming what is missing when nothing pairs, ``TypeError`` for a
     ``rng`` that is not a ``numpy.random.Generator``.
@@ -195,6 +196,7 @@ def compare_filter(
                     "worse": int(np.sum(both & (b > (1 + CHANGE) * a))),
                     "better": int(np.sum(both & (b < (1 - CHANGE) * a))),
                     "identical": int(np.sum((a == b) | (np.isnan(a) & np.isnan(b)))),
+                    "values": (tuple(a.tolist()), tuple(b.tolist())),
                 }
             )
     if not out:
@@ -255,3 +257,52 @@ def paired_filter_lines(result: Sequence[Mapping[str, Any]]) -> list[str]:
         ]
         lines.append("| " + " | ".join(cells) + " |")
     return lines
+
+
+def _line_label(r: Mapping[str, Any], lead: Sequence[str]) -> str:
+    parts = [f"{k}={r['group'][k]}" for k in lead if k != "policy"]
+    parts += [f"{k}={v}" for k, v in r["variant"].items()]
+    return ", ".join(parts) or "all runs"
+
+
+def paired_figure(result: Sequence[Mapping[str, Any]], path, dpi: int = 110):
+    """Every paired run as a dot, filter off (x) against on (y), one panel per (controller,
+    metric), one colour per setting, with y = x and the +-10 % lines; returns ``path``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from pathlib import Path
+
+    import matplotlib.pyplot as plt
+
+    lead = [k for k in result[0]["group"] if len({str(r["group"][k]) for r in result}) > 1]
+    panels = list(dict.fromkeys((r["group"]["policy"], r["metric"]) for r in result))
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.0 * len(panels), 4.0), squeeze=False)
+    for ax, (pol, metric) in zip(axes[0], panels, strict=True):
+        lo, hi = math.inf, -math.inf
+        for r in result:
+            if (r["group"]["policy"], r["metric"]) != (pol, metric):
+                continue
+            a, b = (np.asarray(v, dtype=float) for v in r["values"])
+            ok = np.isfinite(a) & np.isfinite(b)
+            if ok.any():
+                ax.plot(a[ok], b[ok], ".", ms=3, alpha=0.6, label=_line_label(r, lead))
+                lo = min(lo, a[ok].min(), b[ok].min())
+                hi = max(hi, a[ok].max(), b[ok].max())
+        if math.isfinite(lo):
+            x = np.array([lo, hi])
+            ax.plot(x, x, "k-", lw=0.8)
+            for f in (1 - CHANGE, 1 + CHANGE):
+                ax.plot(x, f * x, "k--", lw=0.6)
+        ax.set_xlabel(f"{metric}, filter off")
+        ax.set_ylabel(f"{metric}, filter on")
+        ax.set_title(pol, fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=6, loc="upper left")
+    fig.suptitle("Per run, filter off against on (solid: equal; dashed: +-10 %)")
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
