@@ -97,6 +97,15 @@ def test_a_setting_swept_on_the_filter_side_only_makes_variants():
     assert "| safety_other_accel=40 |" in "\n".join(paired_filter_lines(res))
 
 
+def test_a_filter_off_side_with_several_variants_is_refused():
+    on = [r for r in _suite() if r["safety_filter"] == "cbf"]
+    off = []
+    for d in ("0.1", "1"):
+        off += [_row("smc", 50, "none", s, e, disturbance_std=d) for s, e in enumerate(OFF)]
+    with pytest.raises(ValueError, match=r"run A has several values of \['disturbance_std'\]"):
+        compare_filter(off, on, rng=np.random.default_rng(0))
+
+
 def test_two_filter_off_runs_compare_as_a_placebo():
     off = [r for r in _suite() if r["safety_filter"] == "none"]
     moved = [_row("smc", 50, "none", s, e * 1.2, disturbance_std=1) for s, e in enumerate(OFF)]

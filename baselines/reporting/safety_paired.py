@@ -155,7 +155,15 @@ def compare_filter(
     keys = ["policy", *(k for k in rows_a[0] if k in common and k != "policy")]
     side_a = _side(rows_a, filters[0], keys, "A")
     side_b = _side(rows_b, filters[1], keys, "B")
-    off = {g: runs for (g, _), runs in side_a.items()}
+    off: dict[tuple, dict[tuple[int, int], Row]] = {}
+    for (group, variant), runs in side_a.items():
+        if group in off:  # the filter-off side must be one run per group to pair against
+            raise ValueError(
+                f"run A has several values of {sorted(dict(variant))} in the group "
+                f"{dict(zip(keys, group, strict=True))}: pass its folders as --against, or "
+                "folders that share that setting"
+            )
+        off[group] = runs
     # controllers in order of appearance, each with its settings in order (as the table)
     base = int(rng.integers(2**63))  # each line resamples with its own stream, so that its
     # interval does not depend on which other lines are compared
