@@ -148,6 +148,10 @@ def test_bad_input_is_refused_clearly():
         compare_filter(rows, rng=rng, filters=("none", "on"))
     with pytest.raises(ValueError, match="no run of A with safety_filter=none pairs"):
         compare_filter([r for r in rows if r["safety_filter"] == "cbf"], rng=rng)
+    with pytest.raises(ValueError, match=r"policies=\['sac'\] is invalid: .* have \['smc'\]"):
+        compare_filter(rows, rng=rng, policies=["sac"])
+    one = compare_filter(rows, rng=rng, policies="smc", metrics="band_time")  # one name
+    assert [r["metric"] for r in one] == ["band_time"]
     with pytest.raises(ValueError, match="no rows"):
         compare_filter([], rng=rng)
 

@@ -141,6 +141,7 @@ def compare_filter(
         raise ValueError(f"filters={filters!r} is invalid: must be two of 'none', 'cbf'")
     if not rows_a or not rows_b:
         raise ValueError("nothing to compare: a side has no rows")
+    metrics = (metrics,) if isinstance(metrics, str) else tuple(metrics)
     for m in metrics:
         if any(m not in r for r in (rows_a[0], rows_b[0])):
             raise ValueError(
@@ -148,9 +149,15 @@ def compare_filter(
                 f"{sorted(set(rows_a[0]) & set(rows_b[0]) & _RESULT_COLUMNS)}"
             )
     if policies is not None:
-        wanted = {str(p) for p in policies}
+        wanted = {policies} if isinstance(policies, str) else {str(p) for p in policies}
+        have = sorted({str(r["policy"]) for r in (*rows_a, *rows_b)})
         rows_a = [r for r in rows_a if str(r["policy"]) in wanted]
         rows_b = [r for r in rows_b if str(r["policy"]) in wanted]
+        if not rows_a or not rows_b:
+            raise ValueError(
+                f"policies={sorted(wanted)} is invalid: a side has no run of them; the runs "
+                f"have {have}"
+            )
     common = _settings(rows_a[0]) & _settings(rows_b[0])
     keys = ["policy", *(k for k in rows_a[0] if k in common and k != "policy")]
     side_a = _side(rows_a, filters[0], keys, "A")
