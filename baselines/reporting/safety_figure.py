@@ -46,16 +46,14 @@ def _group_label(r: Mapping[str, Any]) -> str:
 def closest_pass_figure(rows: Sequence[Mapping[str, Any]], path: Path, dpi: int = 110) -> Path:
     """One panel per policy: boxes of closest_pass per scenario group, off and on side by
     side (runs as dots), the safety distance as a dashed line; log scale. Returns ``path``."""
-    import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from .figures import save_figure
 
     policies = list(dict.fromkeys(r["policy"] for r in rows))
     groups = list(dict.fromkeys(_group_label(r) for r in rows))
-    fig, axes = plt.subplots(
-        1, len(policies), figsize=(4.2 * len(policies), 3.8), sharey=True, squeeze=False
-    )
+    fig = Figure(figsize=(4.2 * len(policies), 3.8))
+    axes = fig.subplots(1, len(policies), sharey=True, squeeze=False)
     ds = {float(r.get("safety_distance", 1.0) or 1.0) for r in rows}
     for ax, pol in zip(axes[0], policies, strict=True):
         for k, mode in enumerate(("none", "cbf")):
@@ -91,11 +89,7 @@ def closest_pass_figure(rows: Sequence[Mapping[str, Any]], path: Path, dpi: int 
     axes[0][0].legend(fontsize=8, loc="best")
     fig.suptitle("Closest pass per run, safety filter off vs on (dashed: safety_distance)")
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

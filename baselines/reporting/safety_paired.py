@@ -102,6 +102,56 @@ def _change(a: float, b: float) -> float:
     return b / a - 1.0 if a > 0 and math.isfinite(a) and math.isfinite(b) else math.nan
 
 
+def _line_stats(a: np.ndarray, b: np.ndarray, rng: np.random.Generator, n_boot: int):
+    """One line of :func:`compare_filter` from the paired values off (``a``) and on (``b``)."""
+    sides = []
+    for v in (a, b):
+        f = v[np.isfinite(v)]
+        stats = (float(np.median(f)), float(f.max())) if f.size else (math.nan,) * 2
+        sides.append((*stats, int(v.size - f.size)))
+    both = np.isfinite(a) & np.isfinite(b)
+    p90, ratio = _ratio_stats(a, b, rng, n_boot)
+    return {
+        "runs": int(a.size),
+        "a": sides[0],
+        "b": sides[1],
+        "median_change": _change(sides[0][0], sides[1][0]),
+        "worst_change": _change(sides[0][1], sides[1][1]),
+        "p90_change": p90,
+        "ratio": ratio,
+        "worse": int(np.sum(both & (b > (1 + CHANGE) * a))),
+        "better": int(np.sum(both & (b < (1 - CHANGE) * a))),
+        "identical": int(np.sum((a == b) | (np.isnan(a) & np.isnan(b)))),
+        "values": (tuple(a.tolist()), tuple(b.tolist())),
+    }
+
+
+def _checked_rows(rows_a, rows_b, metrics, policies):
+    """``(rows_a, rows_b, metrics)`` after the checks of :func:`compare_filter`: both sides
+    have rows (of ``policies``, when given) and every metric is a column of both."""
+    rows_b = rows_a if rows_b is None else rows_b
+    if not rows_a or not rows_b:
+        raise ValueError("nothing to compare: a side has no rows")
+    metrics = (metrics,) if isinstance(metrics, str) else tuple(metrics)
+    for m in metrics:
+        if any(m not in r for r in (rows_a[0], rows_b[0])):
+            raise ValueError(
+                f"metric {m!r} is not a column of both runs; they have "
+                f"{sorted(set(rows_a[0]) & set(rows_b[0]) & _RESULT_COLUMNS)}"
+            )
+    if policies is not None:
+        wanted = {policies} if isinstance(policies, str) else {str(p) for p in policies}
+        have = sorted({str(r["policy"]) for r in (*rows_a, *rows_b)})
+        rows_a = [r for r in rows_a if str(r["policy"]) in wanted]
+        rows_b = [r for r in rows_b if str(r["policy"]) in wanted]
+        if not rows_a or not rows_b:
+            raise ValueError(
+                f"policies={sorted(wanted)} is invalid: a side has no run of them; the runs "
+                f"have {have}"
+            )
+    return rows_a, rows_b, metrics
+
+
 def compare_filter(
     rows_a: Sequence[Row],
     rows_b: Sequence[Row] | None = None,
@@ -136,28 +186,9 @@ def compare_filter(
         raise TypeError(f"rng={rng!r} is invalid: must be a numpy.random.Generator")
     if isinstance(n_boot, bool) or not isinstance(n_boot, int) or n_boot < 1:
         raise ValueError(f"n_boot={n_boot!r} is invalid: must be an integer >= 1")
-    rows_b = rows_a if rows_b is None else rows_b
     if len(filters) != 2 or any(f not in ("none", "cbf") for f in filters):
         raise ValueError(f"filters={filters!r} is invalid: must be two of 'none', 'cbf'")
-    if not rows_a or not rows_b:
-        raise ValueError("nothing to compare: a side has no rows")
-    metrics = (metrics,) if isinstance(metrics, str) else tuple(metrics)
-    for m in metrics:
-        if any(m not in r for r in (rows_a[0], rows_b[0])):
-            raise ValueError(
-                f"metric {m!r} is not a column of both runs; they have "
-                f"{sorted(set(rows_a[0]) & set(rows_b[0]) & _RESULT_COLUMNS)}"
-            )
-    if policies is not None:
-        wanted = {policies} if isinstance(policies, str) else {str(p) for p in policies}
-        have = sorted({str(r["policy"]) for r in (*rows_a, *rows_b)})
-        rows_a = [r for r in rows_a if str(r["policy"]) in wanted]
-        rows_b = [r for r in rows_b if str(r["policy"]) in wanted]
-        if not rows_a or not rows_b:
-            raise ValueError(
-                f"policies={sorted(wanted)} is invalid: a side has no run of them; the runs "
-                f"have {have}"
-            )
+    rows_a, rows_b, metrics = _checked_rows(rows_a, rows_b, metrics, policies)
     common = _settings(rows_a[0]) & _settings(rows_b[0])
     keys = ["policy", *(k for k in rows_a[0] if k in common and k != "policy")]
     side_a = _side(rows_a, filters[0], keys, "A")
@@ -188,32 +219,10 @@ def compare_filter(
         for m in metrics:
             a = np.array([_value(runs_a[k], m) for k in shared])
             b = np.array([_value(runs_b[k], m) for k in shared])
-            fa, fb = a[np.isfinite(a)], b[np.isfinite(b)]
-            sides = []
-            for f, v in ((fa, a), (fb, b)):
-                stats = (float(np.median(f)), float(f.max())) if f.size else (math.nan,) * 2
-                sides.append((*stats, int(v.size - f.size)))
-            both = np.isfinite(a) & np.isfinite(b)
             line = zlib.crc32(repr((group, variant, m)).encode())
-            p90, ratio = _ratio_stats(a, b, np.random.default_rng([base, line]), n_boot)
-            out.append(
-                {
-                    "group": dict(zip(keys, group, strict=True)),
-                    "variant": dict(variant),
-                    "metric": m,
-                    "runs": len(shared),
-                    "a": sides[0],
-                    "b": sides[1],
-                    "median_change": _change(sides[0][0], sides[1][0]),
-                    "worst_change": _change(sides[0][1], sides[1][1]),
-                    "p90_change": p90,
-                    "ratio": ratio,
-                    "worse": int(np.sum(both & (b > (1 + CHANGE) * a))),
-                    "better": int(np.sum(both & (b < (1 - CHANGE) * a))),
-                    "identical": int(np.sum((a == b) | (np.isnan(a) & np.isnan(b)))),
-                    "values": (tuple(a.tolist()), tuple(b.tolist())),
-                }
-            )
+            stats = _line_stats(a, b, np.random.default_rng([base, line]), n_boot)
+            head = {"group": dict(zip(keys, group, strict=True)), "variant": dict(variant)}
+            out.append({**head, "metric": m, **stats})
     if not out:
         raise ValueError(
             f"no run of A with safety_filter={filters[0]} pairs with a run of B with "
@@ -283,16 +292,14 @@ def _line_label(r: Mapping[str, Any], lead: Sequence[str]) -> str:
 def paired_figure(result: Sequence[Mapping[str, Any]], path, dpi: int = 110):
     """Every paired run as a dot, filter off (x) against on (y), one panel per (controller,
     metric), one colour per setting, with y = x and the +-10 % lines; returns ``path``."""
-    import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    from pathlib import Path
-
-    import matplotlib.pyplot as plt
+    from .figures import save_figure
 
     lead = [k for k in result[0]["group"] if len({str(r["group"][k]) for r in result}) > 1]
     panels = list(dict.fromkeys((r["group"]["policy"], r["metric"]) for r in result))
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.0 * len(panels), 4.0), squeeze=False)
+    fig = Figure(figsize=(4.0 * len(panels), 4.0))
+    axes = fig.subplots(1, len(panels), squeeze=False)
     for ax, (pol, metric) in zip(axes[0], panels, strict=True):
         lo, hi = math.inf, -math.inf
         for r in result:
@@ -316,8 +323,4 @@ def paired_figure(result: Sequence[Mapping[str, Any]], path, dpi: int = 110):
         ax.legend(fontsize=6, loc="upper left")
     fig.suptitle("Per run, filter off against on (solid: equal; dashed: +-10 %)")
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi)
