@@ -25,10 +25,10 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-from ._moved import install_aliases
+from baselines._moved import install_aliases
 
 if TYPE_CHECKING:  # the names as static tools (type checkers, the API docs) see them
-    from .controllers import (
+    from baselines.controllers import (
         POLICIES,
         BrakingCurveController,
         PairPolicy,

@@ -31,7 +31,7 @@ import numpy as np  # noqa: E402
 from _timing import median_rate, print_breakdown  # noqa: E402
 
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
-from pairflock_env.flocking import FlockingParams, flocking_pass, pair_pass  # noqa: E402
+from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pass  # noqa: E402
 
 SECTIONS = ("core", "pettingzoo", "breakdown", "kernels", "large", "threshold")
 _CLOCK = {"clock": time.perf_counter}  # --cpu-time switches to time.process_time
@@ -117,7 +117,7 @@ def kernel_state(kind: str, N: int, B: int, seed: int = 0):
     """
     # imported here, so that the other sections also run against checkouts older than the
     # grid (before/after comparisons)
-    from pairflock_env.grid_placement import place
+    from pairflock_env.swarm.spacing import place
 
     rng = np.random.default_rng(seed)
     qs = []
@@ -136,7 +136,7 @@ def kernel_state(kind: str, N: int, B: int, seed: int = 0):
 
 def bench_kernels(kind: str, N: int, B: int, grid: bool, repeats: int, min_time: float) -> float:
     """UAV-steps/s of the neighbour kernels of one step (all pairs, or grid build + sweeps)."""
-    from pairflock_env.neighbors import NeighborGrid
+    from pairflock_env.swarm.grid import NeighborGrid
 
     cfg = make_config("paper", n_uavs=N)
     prm = FlockingParams(cfg)

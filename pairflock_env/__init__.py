@@ -9,12 +9,12 @@ The batched engine is :class:`PairFlockCore`; the PettingZoo views are ``paralle
 core through its ``vector_entry_point``, :class:`PairFlockGymVectorEnv`, one row per swarm);
 the SB3 VecEnv with one row per paired UAV is ``pairflock_env.envs.PairFlockSB3VecEnv``
 (imported on first use). Seeds: :mod:`pairflock_env.seeding`; observation and state bounds:
-:mod:`pairflock_env.spaces`.
+:mod:`pairflock_env.task.spaces`.
 """
 
-from .config import PRESETS, PairFlockConfig, make_config, preset_names
-from .core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore, StepResult
-from .envs import (
+from pairflock_env.config import PRESETS, PairFlockConfig, make_config, preset_names
+from pairflock_env.core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore, StepResult
+from pairflock_env.envs import (
     ENV_ID,
     PairFlockAECEnv,
     PairFlockGymEnv,
@@ -25,8 +25,8 @@ from .envs import (
     parallel_env,
     raw_env,
 )
-from .envs._common import deprecated_attr
-from .observations import ObsField, ObsLayout
+from pairflock_env.envs._base import deprecated_attr
+from pairflock_env.task.observations import ObsField, ObsLayout
 
 # The one place the version is written: pyproject.toml reads it from here at build time.
 __version__ = "0.1.0"

@@ -3,7 +3,7 @@
 One control step (:meth:`PairFlockCore.step`), stage by stage:
 
 1. validate the pair actions (B, M, dim) (M = 2 x pairs; before any state changes):
-   :func:`~pairflock_env.actions.check_pair_actions`;
+   :func:`~pairflock_env.task.actions.check_pair_actions`;
 2. decode: clip to [-1, 1], scale by ``pair_accel_limit`` to m/s^2, giving the pair command
    u = f^x of every paired UAV (:meth:`PairFlockCore.decode_actions`); with
    ``safety_filter="cbf"`` each paired UAV then filters its u from what it senses
@@ -13,15 +13,15 @@ One control step (:meth:`PairFlockCore.step`), stage by stage:
 4. the vehicle model integrates ``substeps`` physics steps with a_des held;
 5. the clock and the leader advance; one sweep computes the flocking command of the new
    state together with separations, collisions and connectivity; observations
-   (:mod:`~pairflock_env.observations`, through the partner delay and sensor noise),
-   rewards and termination (:mod:`~pairflock_env.rewards`) and infos
-   (:mod:`~pairflock_env.step_result`) follow.
+   (:mod:`~pairflock_env.task.observations`, through the partner delay and sensor noise),
+   rewards and termination (:mod:`~pairflock_env.task.rewards`) and infos
+   (:mod:`~pairflock_env.task.infos`) follow.
 
 The flocking command of stage 3 was computed at the end of the previous step (or at reset),
 so each step does exactly one sweep: over all pairs (O(N^2)) or, with ``neighbor_search``
-resolving to the grid, over a :class:`~pairflock_env.neighbors.NeighborGrid` rebuilt from
+resolving to the grid, over a :class:`~pairflock_env.swarm.grid.NeighborGrid` rebuilt from
 the positions first (O(N)); both give the same results. Initial states come from
-:mod:`~pairflock_env.placement`. Views (PettingZoo, Gymnasium, SB3) only validate, reshape,
+:mod:`~pairflock_env.swarm.placement`. Views (PettingZoo, Gymnasium, SB3) only validate, reshape,
 name agents and apply their auto-reset rule.
 """
 
@@ -32,31 +32,31 @@ from typing import Any
 
 import numpy as np
 
-from .actions import check_pair_actions, decode_pair_actions, real_array
-from .config import PairFlockConfig, make_config
-from .delay import PartnerDelayBuffer
-from .dynamics import make_vehicle
-from .leader import make_leader
-from .neighbors import NeighborGrid
-from .observations import ObsLayout, add_sensor_noise, build_observation
-from .placement import check_reset_options, initial_state, pinning_mask
-from .rewards import (
-    DIVERGENCE_PENALTY,
-    episode_end,
-    may_overflow,
-    reward_terms,
-    total_reward,
-)
-from .safety.stage import SafetyStage
-from .seeding import swarm_generators
-from .step_result import (
+from pairflock_env.config import PairFlockConfig, make_config
+from pairflock_env.dynamics import make_vehicle
+from pairflock_env.safety.stage import SafetyStage
+from pairflock_env.seeding import swarm_generators
+from pairflock_env.swarm.grid import NeighborGrid
+from pairflock_env.swarm.leader import make_leader
+from pairflock_env.swarm.passes import NeighborSweep
+from pairflock_env.swarm.placement import check_reset_options, initial_state, pinning_mask
+from pairflock_env.task.actions import check_pair_actions, decode_pair_actions, real_array
+from pairflock_env.task.delay import PartnerDelayBuffer
+from pairflock_env.task.infos import (
     AGENT_INFO_KEYS,
     SWARM_INFO_KEYS,
     StepResult,
     hold_last_finite,
     make_info,
 )
-from .sweep import NeighborSweep
+from pairflock_env.task.observations import ObsLayout, add_sensor_noise, build_observation
+from pairflock_env.task.rewards import (
+    DIVERGENCE_PENALTY,
+    episode_end,
+    may_overflow,
+    reward_terms,
+    total_reward,
+)
 
 __all__ = [
     "AGENT_INFO_KEYS",
@@ -264,7 +264,7 @@ class PairFlockCore:
         """Validate pair actions: shape (B, M, dim) (or (M, dim) when B = 1), real, finite.
 
         Returns them as float64 (B, M, dim); what is accepted is listed in
-        :mod:`pairflock_env.actions`.
+        :mod:`pairflock_env.task.actions`.
         """
         return check_pair_actions(
             actions, self.num_envs, self.n_agents, self.config.dim, self.agent_uavs
@@ -355,7 +355,7 @@ class PairFlockCore:
 
     def _sweep(self, lq: np.ndarray, lp: np.ndarray) -> tuple[dict, dict[str, np.ndarray]]:
         """The flocking sweep of the current state and the agents' pair quantities (B, M)
-        (:class:`~pairflock_env.sweep.NeighborSweep`)."""
+        (:class:`~pairflock_env.swarm.passes.NeighborSweep`)."""
         fl, pair = self._neighbors.run(self.q, self.p, lq, lp, self._pinned)
         self._flock_out = fl
         return fl, pair
@@ -388,7 +388,7 @@ class PairFlockCore:
 
     def _saturate_noise(self, obs: np.ndarray) -> np.ndarray:
         """Where noise overflowed an observation: the noisy fields again, saturated by
-        :func:`~pairflock_env.observations.add_sensor_noise` (values that did not overflow
+        :func:`~pairflock_env.task.observations.add_sensor_noise` (values that did not overflow
         stay as they were); returns which swarms' observations are finite now."""
         off, noise_off, vel, noise_vel = self._noise
         sl = self.layout.slice

@@ -227,7 +227,7 @@ def test_unknown_keywords_are_type_errors_everywhere():
 
     from pairflock_env import ENV_ID, PairFlockCore
     from pairflock_env.config import UnknownFieldError
-    from pairflock_env.learning import PairFrameParams, make_interface
+    from pairflock_env.interfaces import PairFrameParams, make_interface
 
     cfg = make_config("paper", n_uavs=8)
     calls = [
@@ -334,7 +334,7 @@ def test_placement_that_cannot_succeed_is_refused_at_construction():
 
 def test_obs_size_formula_matches_the_layout():
     from pairflock_env.config.sections.sensing import obs_size
-    from pairflock_env.observations import ObsLayout
+    from pairflock_env.task.observations import ObsLayout
 
     for dim in (2, 3):
         for k in (0, 1, 6, 1000):
@@ -346,7 +346,7 @@ def test_safe_distance_is_a_deprecated_alias():
     import pickle
     import warnings
 
-    from pairflock_env.learning import PairFrameParams, interface_from_dict, make_interface
+    from pairflock_env.interfaces import PairFrameParams, interface_from_dict, make_interface
 
     with pytest.warns(DeprecationWarning, match="safe_distance.*reward_separation_distance"):
         cfg = make_config("paper", safe_distance=1.5)

@@ -28,11 +28,11 @@ from hypothesis import strategies as st
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.config import SCHEMA
 from pairflock_env.config.fields import Box, Choice, Flag, Int, Kind, OrNone, Real, Vector
-from pairflock_env.config.frame import FRAME_SCHEMA
 from pairflock_env.config.sections.flocking import Pinning
 from pairflock_env.config.sections.leader import Turns
 from pairflock_env.config.sections.pairs import Pairs, PerPair
-from pairflock_env.learning import make_interface
+from pairflock_env.interfaces import make_interface
+from pairflock_env.interfaces.pair_frame_params import FRAME_SCHEMA
 
 FIELD_NAMES = tuple(SCHEMA.fields)
 #: small, fast tasks the fuzzed fields are applied to (one per vehicle model)

@@ -7,19 +7,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pairflock_env import PairFlockCore, make_config, placement
-from pairflock_env.delay import PartnerDelayBuffer
-from pairflock_env.observations import ObsLayout, build_observation
-from pairflock_env.pairing import agent_pair_state, pair_error, sliding_surface
-from pairflock_env.placement import initial_state, pinning_mask
-from pairflock_env.rewards import DIVERGENCE_PENALTY, episode_end, reward_terms, total_reward
-from pairflock_env.step_result import (
+from pairflock_env import PairFlockCore, make_config
+from pairflock_env.swarm import placement
+from pairflock_env.swarm.placement import initial_state, pinning_mask
+from pairflock_env.task.delay import PartnerDelayBuffer
+from pairflock_env.task.infos import (
     AGENT_INFO_KEYS,
     LIVE_INFO_KEYS,
     SWARM_INFO_KEYS,
     hold_last_finite,
     make_info,
 )
+from pairflock_env.task.observations import ObsLayout, build_observation
+from pairflock_env.task.pairing import agent_pair_state, pair_error, sliding_surface
+from pairflock_env.task.rewards import DIVERGENCE_PENALTY, episode_end, reward_terms, total_reward
 
 
 # --------------------------------------------------------------------------- placement

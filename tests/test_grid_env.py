@@ -9,7 +9,7 @@ import pytest
 from pairflock_env import PairFlockCore, make_config, parallel_env
 from pairflock_env.config.sections.pairs import START_HALF_WIDTH, START_UAVS
 from pairflock_env.config.sections.swarm import GRID_MIN_UAVS
-from pairflock_env.placement import pinning_mask
+from pairflock_env.swarm.placement import pinning_mask
 
 #: distance within which the two searches' trajectories must agree (m)
 TRAJECTORY_TOL = 1e-9

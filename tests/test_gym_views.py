@@ -16,7 +16,7 @@ import pairflock_env
 from pairflock_env import ENV_ID, make_config, parallel_env
 from pairflock_env.core import PairFlockCore
 from pairflock_env.envs.vector import PairFlockGymVectorEnv
-from pairflock_env.learning import interface_from_dict, make_interface, pair_basis
+from pairflock_env.interfaces import interface_from_dict, make_interface, pair_basis
 
 SMALL = dict(n_uavs=12, pair_accel_limit=50.0)
 

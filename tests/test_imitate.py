@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pairflock_env import PairFlockCore, make_config
-from pairflock_env.learning import make_interface
+from pairflock_env.interfaces import make_interface
 
 
 @pytest.mark.parametrize("dim", [2, 3])

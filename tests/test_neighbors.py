@@ -8,9 +8,8 @@ import pytest
 
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.config import corner_diagonals
-from pairflock_env.flocking import FlockingParams, flocking_pass, pair_pass
-from pairflock_env.grid_placement import place, redraw_conflicts
-from pairflock_env.neighbors import (
+from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pass
+from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
     block_count,
@@ -18,6 +17,7 @@ from pairflock_env.neighbors import (
     order_indices,
     point_cell,
 )
+from pairflock_env.swarm.spacing import place, redraw_conflicts
 
 
 def same(a: np.ndarray, b: np.ndarray) -> bool:

@@ -8,7 +8,7 @@ import pytest
 
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.dynamics import ParticleModel
-from pairflock_env.flocking import FlockingParams, flocking_pass, pair_pass
+from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pass
 
 
 def brute_force_flocking(cfg, q, p, lq, lp, h):

@@ -19,7 +19,6 @@ from baselines.quadrotor_invariants import (
 )
 from pairflock_env import PairFlockCore, make_config, parallel_env
 from pairflock_env.dynamics.quadrotor import QuadrotorModel
-from pairflock_env.leader import ClimbAndTurnLeader, make_leader
 from pairflock_env.math3d import (
     euler_zyx,
     hat,
@@ -28,6 +27,7 @@ from pairflock_env.math3d import (
     so3_exp,
     vee,
 )
+from pairflock_env.swarm.leader import ClimbAndTurnLeader, make_leader
 
 G = 9.81
 

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from pairflock_env import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore, parallel_env
-from pairflock_env.observations import add_sensor_noise
-from pairflock_env.rewards import REWARD_TERMS
-from pairflock_env.step_result import LIVE_INFO_KEYS
+from pairflock_env.task.infos import LIVE_INFO_KEYS
+from pairflock_env.task.observations import add_sensor_noise
+from pairflock_env.task.rewards import REWARD_TERMS
 
 STEPS = 60
 

@@ -24,7 +24,7 @@ from pairflock_env.safety import (
     project,
     safety_filter,
 )
-from pairflock_env.safety._kernels import _far, _far_terms, _sigma_min
+from pairflock_env.safety.cbf.kernels import _far, _far_terms, _sigma_min
 
 # ----------------------------------------------------------------------------- references
 
@@ -180,7 +180,7 @@ def test_solver_examples_and_bad_input():
 def test_many_constraints_are_solved_on_a_working_set_exactly():
     # K > WS_DIRECT: the working set (16 least satisfied, then the most violated) gives the
     # optimum of the full problem, feasible or not, against the references
-    from pairflock_env.safety._kernels import WS_DIRECT
+    from pairflock_env.safety.cbf.kernels import WS_DIRECT
 
     rng = np.random.default_rng(9)
     seen = {STATUS_PROJECTED: 0, STATUS_INFEASIBLE: 0}
@@ -204,7 +204,7 @@ def test_many_constraints_are_solved_on_a_working_set_exactly():
 
 
 def _ws_call(un, G, b, U, cap):
-    from pairflock_env.safety._kernels import _solve_ws
+    from pairflock_env.safety.cbf.kernels import _solve_ws
 
     K, D = G.shape
     Gp, up = np.zeros((K, 3)), np.zeros(3)
@@ -218,7 +218,7 @@ def _ws_call(un, G, b, U, cap):
 
 def test_the_working_set_gives_the_full_enumerations_answer():
     # the working set against the enumeration over all K (what the filter ran before it)
-    from pairflock_env.safety._kernels import _solve
+    from pairflock_env.safety.cbf.kernels import _solve
 
     rng = np.random.default_rng(10)
     statuses = set()
@@ -242,7 +242,7 @@ def test_the_working_set_gives_the_full_enumerations_answer():
 def test_a_capped_working_set_reports_the_step_infeasible_with_its_true_margin():
     # the filter stops the working set at WS_MAX: such a step is flagged (no guarantee), its
     # command stays in the ball and its margin is the one over all constraints
-    from pairflock_env.safety._kernels import WS_DIRECT
+    from pairflock_env.safety.cbf.kernels import WS_DIRECT
 
     rng = np.random.default_rng(11)
     capped = 0

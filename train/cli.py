@@ -75,7 +75,7 @@ def _seed_list(text: str) -> list[int]:
 
 
 def _task_options(p: argparse.ArgumentParser) -> None:
-    from .settings import ALGOS
+    from train.settings import ALGOS
 
     g = p.add_argument_group("task")
     g.add_argument(
@@ -116,7 +116,7 @@ def _task_options(p: argparse.ArgumentParser) -> None:
         "--frame",
         dest="interface",
         choices=("pair", "world"),
-        help="what the policy sees and outputs (default: pair; see pairflock_env.learning; "
+        help="what the policy sees and outputs (default: pair; see pairflock_env.interfaces; "
         "--frame is the old name)",
     )
     g.add_argument(
@@ -202,7 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _parse_sets(items: list[str], flag: str):
-    from .settings import parse_assignment
+    from train.settings import parse_assignment
 
     return [parse_assignment(t, flag) for t in items]
 
@@ -214,7 +214,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     from baselines.evaluation.parallel import pin_threads
 
     pin_threads(load_torch=True)
-    from .callbacks import GracefulInterrupt
+    from train.callbacks import GracefulInterrupt
 
     try:
         with GracefulInterrupt() as interrupt:
@@ -243,8 +243,8 @@ _FIXED_ON_RESUME = (
 
 def _resume_settings(args: argparse.Namespace):
     """(settings, run directory) of ``--resume``."""
-    from .checkpoint import latest_checkpoint
-    from .settings import load_yaml, settings_from_sources
+    from train.checkpoint import latest_checkpoint
+    from train.settings import load_yaml, settings_from_sources
 
     changing = [name for name in _FIXED_ON_RESUME if getattr(args, name) is not None]
     changing += [
@@ -266,7 +266,7 @@ def _resume_settings(args: argparse.Namespace):
 
 def _new_settings(args: argparse.Namespace, parser: argparse.ArgumentParser):
     """Settings of a new run: defaults < ``--config`` < flags < assignments."""
-    from .settings import load_yaml, settings_from_sources
+    from train.settings import load_yaml, settings_from_sources
 
     if args.out is None:
         parser.error("--out is required (or --resume RUN_DIR)")
@@ -300,7 +300,7 @@ def _new_settings(args: argparse.Namespace, parser: argparse.ArgumentParser):
 
 
 def _message(result, settings, out) -> str:
-    from .run import ALREADY_COMPLETE
+    from train.run import ALREADY_COMPLETE
 
     if result.status == ALREADY_COMPLETE:
         return (
@@ -310,7 +310,7 @@ def _message(result, settings, out) -> str:
     s = result.final_summary
     msg = f"{result.status}: {result.num_timesteps} steps in {result.wall_s / 60:.1f} min -> {out}"
     if s:
-        from .tasks import evaluation_tasks, is_mix
+        from train.tasks import evaluation_tasks, is_mix
 
         tasks = f" (worst of {len(evaluation_tasks(settings))} tasks)" if is_mix(settings) else ""
         msg += (
@@ -323,7 +323,7 @@ def _message(result, settings, out) -> str:
 
 
 def _main(args: argparse.Namespace, parser: argparse.ArgumentParser, interrupt) -> int:
-    from .run import train
+    from train.run import train
 
     if args.resume is not None:
         settings, out = _resume_settings(args)

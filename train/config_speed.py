@@ -21,7 +21,7 @@ __all__ = ["estimate_run_s", "measure_config", "run_configs"]
 
 
 def _settings(path: Path):
-    from .settings import load_yaml, settings_from_sources
+    from train.settings import load_yaml, settings_from_sources
 
     return settings_from_sources(load_yaml(path))
 
@@ -30,10 +30,9 @@ def measure_config(path: Path, steps: int) -> dict[str, float]:
     """Decisions per CPU second and per wall second of ``model.learn`` for the config at
     ``path`` (after a warm-up), and the CPU seconds of one evaluation."""
     from baselines.controllers.sb3 import SB3PairPolicy
-
-    from .model import build_model
-    from .run import evaluate_policy_rows, make_vec_env
-    from .tasks import evaluation_tasks
+    from train.model import build_model
+    from train.run import evaluate_policy_rows, make_vec_env
+    from train.tasks import evaluation_tasks
 
     s = _settings(path)
     venv = make_vec_env(s)

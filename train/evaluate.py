@@ -276,7 +276,7 @@ def _summary(model: Path, seeds: list[int], table: str, checks, targets: str) ->
         f"# Evaluation of `{model}`",
         "",
         f"Held-out seeds {seeds[0]}-{seeds[-1]}; full episodes; median [min-max] over seeds; "
-        "metrics of `pairflock_env.metrics` via `baselines.evaluation.rollout`.",
+        "metrics of `pairflock_env.task.metrics` via `baselines.evaluation.rollout`.",
         "",
         table,
         "",

@@ -11,7 +11,7 @@ Bagnell, 2011):
 
 1. the teacher flies the training envs for ``--decisions`` policy decisions per row, each of
    its world-frame commands turned into the network's pair-frame action by the interface's
-   inverse (:meth:`~pairflock_env.learning.PairFrameInterface.action_for`) and held for the
+   inverse (:meth:`~pairflock_env.interfaces.PairFrameInterface.action_for`) and held for the
    interface's decision period, exactly like a network action;
 2. the network is fitted to every (encoded observation, teacher action) pair collected so far
    (mean squared error of the Gaussian's mean, Adam, ``--epochs`` passes, the learning rate
@@ -167,7 +167,7 @@ def dagger(
 
 
 def _settings(config: str, seed: int, env_sets: list[tuple[str, Any]], eval_sets):
-    from .settings import load_yaml, resolve_config, settings_from_sources
+    from train.settings import load_yaml, resolve_config, settings_from_sources
 
     data = dict(load_yaml(resolve_config(config)))
     data.pop("init_model", None)  # imitation starts from the run's fresh network
@@ -201,8 +201,8 @@ def imitate(
     from baselines.evaluation.parallel import pin_threads
 
     pin_threads(load_torch=True)
-    from .model import METADATA_KEY, build_model, metadata, save_model_atomic
-    from .run import make_vec_env
+    from train.model import METADATA_KEY, build_model, metadata, save_model_atomic
+    from train.run import make_vec_env
 
     t0 = time.perf_counter()
     settings = _settings(config, seed, list(env_sets), list(eval_sets))
@@ -235,10 +235,9 @@ def validation_summary(model: Any, settings: Any, interface: Any) -> dict[str, f
     """The run's own evaluation of ``model`` (its evaluation tasks and seeds, full episodes)
     and the score ``python -m train`` keeps its best model by (lower is better)."""
     from baselines.reporting.criteria import TARGETS
-
-    from .mix_eval import score_function
-    from .run import evaluate_model
-    from .tasks import evaluation_tasks
+    from train.mix_eval import score_function
+    from train.run import evaluate_model
+    from train.tasks import evaluation_tasks
 
     cfgs = {t.name: t.config(settings.preset) for t in evaluation_tasks(settings)}
     targets = TARGETS[settings.eval_targets]
@@ -262,7 +261,7 @@ SEED_METRICS = (
 def seed_summary(records: Sequence[dict[str, Any]]) -> tuple[str, int]:
     """Markdown of the validation of every seed and IQM [95 % CI] over seeds (rliable,
     :func:`train.sweep_stats.iqm_ci`); and the seed with the best (lowest) score."""
-    from .sweep_stats import iqm_ci
+    from train.sweep_stats import iqm_ci
 
     rows = sorted(records, key=lambda r: r["seed"])
     vals = np.array([[r["validation"][k] for k, _ in SEED_METRICS] for r in rows], float)

@@ -231,8 +231,7 @@ def make_mix_vec_env(settings: Any, seed_offset: int = 0) -> TaskMixVecEnv:
     """The training VecEnv of a run with ``tasks``: one PairFlockSB3VecEnv per task (its
     swarms, its config), seeded by :func:`task_seeds` from the run seed."""
     from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
-
-    from .tasks import training_tasks
+    from train.tasks import training_tasks
 
     tasks = training_tasks(settings)
     seeds = task_seeds(np.random.SeedSequence([settings.seed, seed_offset]), len(tasks))

@@ -39,8 +39,7 @@ def summarize_tasks(
     ``targets`` (:class:`baselines.reporting.criteria.LearnedTargets`, default ``LEARNED``)
     give each task's score."""
     from baselines.reporting.criteria import LEARNED, learned_score
-
-    from .callbacks import SUMMARY, summarize_metrics
+    from train.callbacks import SUMMARY, summarize_metrics
 
     if list(rows_by_task) == [""]:
         return summarize_metrics(rows_by_task[""])
@@ -67,9 +66,8 @@ def score_function(settings: Any) -> Callable[[Mapping[str, float]], float]:
     """The score a run keeps its best model by: lower is better, 0 when every target is met
     (plus the median error as a tie-breaker)."""
     from baselines.reporting.criteria import TARGETS, learned_score
-
-    from .callbacks import eval_score
-    from .tasks import evaluation_tasks, is_mix
+    from train.callbacks import eval_score
+    from train.tasks import evaluation_tasks, is_mix
 
     if not is_mix(settings):
         if settings.eval_targets == "learned":

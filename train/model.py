@@ -9,8 +9,7 @@ from typing import Any
 import numpy as np
 
 from baselines.controllers.sb3 import METADATA_KEY
-
-from .settings import RunSettings
+from train.settings import RunSettings
 
 __all__ = [
     "METADATA_KEY",

@@ -21,9 +21,8 @@ from typing import Any
 import numpy as np
 
 from baselines.evaluation.parallel import pin_threads
-
-from .model import METADATA_KEY, linear_schedule, resolve_schedules
-from .settings import RunSettings
+from train.model import METADATA_KEY, linear_schedule, resolve_schedules
+from train.settings import RunSettings
 
 __all__ = [
     "METADATA_KEY",
@@ -64,7 +63,7 @@ def make_vec_env(settings: RunSettings, seed_offset: int = 0):
     from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
 
     if settings.tasks is not None:  # a mix: one task env per task, rows concatenated
-        from .mix_env import make_mix_vec_env
+        from train.mix_env import make_mix_vec_env
 
         return VecMonitor(make_mix_vec_env(settings, seed_offset))
     ss = np.random.SeedSequence([settings.seed, seed_offset])
@@ -89,8 +88,7 @@ def evaluate_model(model: Any, interface: Any, eval_cfgs, seeds, targets):
     """A model's evaluation as a run selects by: rows per task (``eval_cfgs``: task name ->
     config) on ``seeds``, and their summary (:func:`train.mix_eval.summarize_tasks`)."""
     from baselines.controllers.sb3 import SB3PairPolicy
-
-    from .mix_eval import summarize_tasks
+    from train.mix_eval import summarize_tasks
 
     iface = interface.to_dict()
     by_task = {
@@ -132,8 +130,7 @@ class _Session:
 
     def __init__(self, settings: RunSettings, out: Path, ckpt: Path | None, state, quiet: bool):
         from pairflock_env import make_config
-
-        from .tasks import evaluation_tasks, training_tasks
+        from train.tasks import evaluation_tasks, training_tasks
 
         self.settings, self.out, self.ckpt, self.state, self.quiet = (
             settings,
@@ -167,8 +164,8 @@ class _Session:
 
     # ------------------------------------------------------------------ env and model
     def build_model(self) -> None:
-        from .checkpoint import restore_monitor, set_rng_state
-        from .model import build_model, load_model, metadata
+        from train.checkpoint import restore_monitor, set_rng_state
+        from train.model import build_model, load_model, metadata
 
         self.venv = make_vec_env(self.settings)
         self.interface = self.venv.unwrapped.interface
@@ -197,8 +194,7 @@ class _Session:
         """The analytic controllers on the evaluation seeds, computed once per run."""
         from baselines import make_pair_policy
         from baselines.evaluation.io import write_json
-
-        from .mix_eval import summarize_tasks, tagged_rows
+        from train.mix_eval import summarize_tasks, tagged_rows
 
         path, s = self.out / "eval_baselines.json", self.settings
         if self.state is not None and path.is_file():
@@ -215,7 +211,7 @@ class _Session:
         return summaries
 
     def evaluate(self):
-        from .mix_eval import tagged_rows
+        from train.mix_eval import tagged_rows
 
         by_task, summary = evaluate_model(
             self.model, self.interface, self.eval_cfgs, self.settings.eval_seeds, self.targets
@@ -224,8 +220,7 @@ class _Session:
 
     def on_result(self, step: int, rows, summary, improved: bool) -> None:
         from baselines.evaluation.io import write_csv, write_json
-
-        from .model import save_model_atomic
+        from train.model import save_model_atomic
 
         self.history.append({"step": step, "wall_s": round(self.wall(), 1), **summary})
         columns = list(dict.fromkeys(k for r in self.history for k in r))
@@ -237,8 +232,8 @@ class _Session:
 
     # ------------------------------------------------------------------ callbacks
     def make_callbacks(self, baselines: dict[str, dict[str, float]]) -> None:
-        from .callbacks import CheckpointCallback, EvalCallback, ProgressCallback
-        from .mix_eval import score_function
+        from train.callbacks import CheckpointCallback, EvalCallback, ProgressCallback
+        from train.mix_eval import score_function
 
         s, st = self.settings, self.state
         self.progress = ProgressCallback(s.total_steps, disable=self.quiet)
@@ -257,7 +252,7 @@ class _Session:
         self.checkpointer = CheckpointCallback(self.save, s.checkpoint_every, next_save=next_save)
 
     def save(self, step: int) -> Path:
-        from .checkpoint import save_checkpoint
+        from train.checkpoint import save_checkpoint
 
         extra = {
             "history": self.history,
@@ -273,8 +268,7 @@ class _Session:
     # ------------------------------------------------------------------ learning
     def start_record(self) -> None:
         from baselines.evaluation.io import run_record, write_json
-
-        from .tasks import is_mix
+        from train.tasks import is_mix
 
         mix = {}
         if is_mix(self.settings):  # every task's config (the first is "config" too)
@@ -300,7 +294,7 @@ class _Session:
     def learn(self, interrupt: Any) -> str:
         """Learn to the step target; a stop (Ctrl-C, time limit) ends at a rollout boundary,
         where the checkpoint written next resumes exactly."""
-        from .callbacks import GracefulInterrupt, StopCallback, StopTraining
+        from train.callbacks import GracefulInterrupt, StopCallback, StopTraining
 
         s = self.settings
         time_limit = None if s.time_limit is None else s.time_limit * 60.0 - self.wall_before
@@ -321,8 +315,7 @@ class _Session:
     def finish(self, status: str, baselines) -> RunResult:
         """Final checkpoint, model and evaluation (also after Ctrl-C: nothing is lost)."""
         from baselines.evaluation.io import write_json
-
-        from .model import save_model_atomic
+        from train.model import save_model_atomic
 
         model = self.model
         ck = self.save(model.num_timesteps)
@@ -352,7 +345,7 @@ class _Session:
 def _open(settings: RunSettings, out: Path, resume: Path | None, overwrite: bool):
     """(checkpoint, its state) to resume from, or (None, None) for a new run in a fresh
     ``out``; a resumed run that has reached its target gives a :class:`RunResult`."""
-    from .checkpoint import latest_checkpoint, load_checkpoint_state
+    from train.checkpoint import latest_checkpoint, load_checkpoint_state
 
     if resume is None:
         _prepare_dir(out, overwrite)

@@ -236,7 +236,7 @@ class RunSettings:
     # ------------------------------------------------------------------ validation
     def validate(self) -> RunSettings:
         from pairflock_env import make_config
-        from pairflock_env.learning import make_interface
+        from pairflock_env.interfaces import make_interface
 
         if self.algo not in ALGOS:
             raise ValueError(f"algo={self.algo!r} is invalid: must be one of {', '.join(ALGOS)}")
@@ -261,7 +261,7 @@ class RunSettings:
                 f"time_limit={self.time_limit!r} is invalid: must be > 0 minutes or None"
             )
         if self.init_model is not None:
-            from .model import init_model_path
+            from train.model import init_model_path
 
             init_model_path(self.init_model)
         for name in ("env", "eval_env", "interface_params", "hyperparameters"):
@@ -282,11 +282,11 @@ class RunSettings:
                     f"eval_baselines entry {b!r} is invalid: analytic controllers are "
                     f"{', '.join(k for k in POLICIES if not k.endswith(':'))}"
                 )
-        from .tasks import check_tasks
+        from train.tasks import check_tasks
 
         check_tasks(self)
         _check_hyperparameters(self.algo, self.algo_hyperparameters())
-        from .model import resolve_schedules
+        from train.model import resolve_schedules
 
         resolve_schedules(self.algo_hyperparameters())
         return self

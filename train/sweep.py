@@ -79,7 +79,7 @@ _PLAN_FLAGS = (
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``python -m train.sweep``."""
-    from .cli import _int_like
+    from train.cli import _int_like
 
     p = argparse.ArgumentParser(
         prog="python -m train.sweep",
@@ -144,7 +144,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the sweep; exit status 0 (all trials done), 1 (some failed), 130 (interrupted)."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    from .run import pin_threads
+    from train.run import pin_threads
 
     pin_threads()
     try:
@@ -162,8 +162,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _plan_from_args(args: argparse.Namespace):
-    from .settings import load_yaml
-    from .sweep_plan import SweepPlan, parse_domain, parse_grid
+    from train.settings import load_yaml
+    from train.sweep_plan import SweepPlan, parse_domain, parse_grid
 
     search = None if args.search in (None, "grid") else args.search
     if search is None and (args.samples is not None or args.metric or args.mode):
@@ -193,7 +193,7 @@ def _plan_from_args(args: argparse.Namespace):
 
 
 def _check_search(plan) -> None:
-    from .callbacks import SUMMARY
+    from train.callbacks import SUMMARY
 
     if plan.samples < 1:
         raise ValueError(f"--samples {plan.samples} is invalid: --search optuna needs >= 1")
@@ -208,7 +208,7 @@ def _check_search(plan) -> None:
 
 def _prepare(args: argparse.Namespace):
     """The sweep directory and plan (new, repeated or resumed) and the stored record."""
-    from .sweep_plan import SweepPlan, load_sweep, same_plan
+    from train.sweep_plan import SweepPlan, load_sweep, same_plan
 
     if args.resume is not None:
         given = [f for f in _PLAN_FLAGS if getattr(args, f) not in (None, [])]
@@ -240,10 +240,9 @@ def _prepare(args: argparse.Namespace):
 
 def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
     from baselines.evaluation.io import run_record, write_json
-
-    from .sweep_local import Progress
-    from .sweep_plan import SWEEP_FILE
-    from .sweep_trial import finished_result
+    from train.sweep_local import Progress
+    from train.sweep_plan import SWEEP_FILE
+    from train.sweep_trial import finished_result
 
     out, plan, stored = _prepare(args)
     if plan.search and args.backend != "ray":
@@ -288,19 +287,19 @@ def _main(args: argparse.Namespace, parser: argparse.ArgumentParser) -> int:
 
 
 def _run_backend(args, plan, pending, out: Path, progress):
-    from .sweep_local import Outcome
+    from train.sweep_local import Outcome
 
     if not plan.search and not pending:
         return Outcome()  # every trial finished already
     if args.backend == "local":
         import os
 
-        from .sweep_local import run_local
+        from train.sweep_local import run_local
 
         limit = args.max_concurrent or os.cpu_count() or 1
         return run_local(pending, out, limit, progress)
     try:
-        from .sweep_ray import run_ray
+        from train.sweep_ray import run_ray
     except ImportError:
         raise ImportError(
             "--backend ray needs Ray Tune: pip install 'pairflock-env[sweep]'"
@@ -319,7 +318,7 @@ def _run_backend(args, plan, pending, out: Path, progress):
 
 def _gather(plan, trials, out: Path, outcome) -> list[dict[str, Any]]:
     """Every finished trial's result, in the plan's order (search: by setting, then seed)."""
-    from .sweep_trial import finished_result
+    from train.sweep_trial import finished_result
 
     if not trials:
         return sorted(outcome.results.values(), key=lambda r: (r["label"], r["seed"]))
@@ -333,8 +332,7 @@ def _gather(plan, trials, out: Path, outcome) -> list[dict[str, Any]]:
 
 def _write_outputs(args, plan, out: Path, results, total: int, wall: float) -> None:
     from baselines.evaluation.io import atomic_write_text, write_csv
-
-    from .sweep_stats import csv_rows, curves_figure, summary_markdown
+    from train.sweep_stats import csv_rows, curves_figure, summary_markdown
 
     keys = [k for k, _ in plan.grid]
     write_csv(out / "sweep.csv", csv_rows(results, keys))

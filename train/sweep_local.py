@@ -21,8 +21,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .sweep_plan import Trial
-from .sweep_trial import finished_result
+from train.sweep_plan import Trial
+from train.sweep_trial import finished_result
 
 __all__ = ["Outcome", "Progress", "run_local"]
 

@@ -130,7 +130,7 @@ def settings_for(
 ):
     """Validated :class:`~train.settings.RunSettings`: ``base`` (a settings mapping, e.g. the
     ``--config`` YAML) with dotted ``assignments`` and ``flags`` on top."""
-    from .settings import settings_from_sources
+    from train.settings import settings_from_sources
 
     data = copy.deepcopy(dict(base))
     env_sets, hp_sets, interface_sets = [], [], []

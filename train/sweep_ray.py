@@ -24,9 +24,9 @@ from ray import tune
 from ray.tune.search import ConcurrencyLimiter, Repeater
 from ray.tune.search.repeater import TRIAL_INDEX
 
-from .sweep_local import Outcome, Progress
-from .sweep_plan import SweepPlan, Trial
-from .sweep_trial import result_scalars, run_trial
+from train.sweep_local import Outcome, Progress
+from train.sweep_plan import SweepPlan, Trial
+from train.sweep_trial import result_scalars, run_trial
 
 __all__ = ["EXPERIMENT", "run_ray"]
 

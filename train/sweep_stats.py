@@ -73,7 +73,7 @@ def iqm_ci(
 
 def csv_rows(results: Sequence[Mapping[str, Any]], grid_keys: Sequence[str]) -> list[dict]:
     """One row per trial: setting, grid values, seed, metrics, aims; wall times last."""
-    from .sweep_trial import result_scalars
+    from train.sweep_trial import result_scalars
 
     rows = []
     for r in results:

@@ -29,7 +29,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from .sweep_plan import SWEEP_FILE, Trial
+from train.sweep_plan import SWEEP_FILE, Trial
 
 __all__ = [
     "FINAL_ROWS",
@@ -68,7 +68,7 @@ def _newest_record(run_dir: Path) -> dict[str, Any] | None:
 
 
 def _has_checkpoint(run_dir: Path) -> bool:
-    from .checkpoint import latest_checkpoint
+    from train.checkpoint import latest_checkpoint
 
     try:
         latest_checkpoint(run_dir)
@@ -79,7 +79,7 @@ def _has_checkpoint(run_dir: Path) -> bool:
 
 def _train(trial: Trial, run_dir: Path, settings, interrupt) -> str:
     """Train or resume the run; its final status."""
-    from .run import train
+    from train.run import train
 
     record = _newest_record(run_dir) if run_dir.is_dir() else None
     if (
@@ -100,9 +100,8 @@ def _final_rows(run_dir: Path, settings) -> tuple[dict[str, list[dict[str, Any]]
     """The final model evaluated on each evaluation seed of every evaluation task (the rows
     the aims judge), and the tasks' configs, both by task name (one task: the name "")."""
     from baselines import make_pair_policy
-
-    from .run import evaluate_policy_rows
-    from .tasks import evaluation_tasks
+    from train.run import evaluate_policy_rows
+    from train.tasks import evaluation_tasks
 
     rows, cfgs = {}, {}
     for task in evaluation_tasks(settings):
@@ -121,8 +120,7 @@ def aims(rows: list[dict[str, Any]], cfg: Any, targets: Any = None) -> list[dict
     (``N=20 corners:``) dropped so that settings share names.
     """
     from baselines.reporting.criteria import LEARNED
-
-    from .evaluate import acceptance
+    from train.evaluate import acceptance
 
     tagged = [{**r, "policy": "learned", "n_uavs": cfg.n_uavs, "init": cfg.init} for r in rows]
     out = []
@@ -170,9 +168,8 @@ def collect(trial: Trial, run_dir: Path, settings) -> dict[str, Any]:
     """The result of a trained trial (see the module docstring)."""
     from baselines.evaluation.io import write_csv
     from baselines.reporting.criteria import TARGETS
-
-    from .mix_eval import score_function, tagged_rows
-    from .tasks import is_mix
+    from train.mix_eval import score_function, tagged_rows
+    from train.tasks import is_mix
 
     record = _newest_record(run_dir) or {}
     best_path = run_dir / "best_model.json"
@@ -226,9 +223,8 @@ def run_trial(trial: Trial | dict[str, Any], sweep_dir: Path, interrupt: Any = N
     start resumes it.
     """
     from baselines.evaluation.io import write_json
-
-    from .run import pin_threads
-    from .settings import settings_from_sources
+    from train.run import pin_threads
+    from train.settings import settings_from_sources
 
     pin_threads()
     trial = trial if isinstance(trial, Trial) else Trial.from_dict(trial)
@@ -290,7 +286,7 @@ def _watch_parent(parent: int) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Worker entry of the local backend: ``python -m train.sweep_trial SWEEP_DIR NAME``."""
-    from .callbacks import GracefulInterrupt
+    from train.callbacks import GracefulInterrupt
 
     args = list(sys.argv[1:] if argv is None else argv)
     if len(args) != 2:

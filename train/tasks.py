@@ -179,7 +179,7 @@ def evaluation_tasks(settings: Any) -> list[Task]:
 
 
 def _interface(settings: Any, cfg: Any, where: str):
-    from pairflock_env.learning import make_interface
+    from pairflock_env.interfaces import make_interface
 
     try:
         return make_interface(settings.interface, cfg, **settings.interface_params)

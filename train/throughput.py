@@ -40,8 +40,7 @@ def make_route(route: str, num_swarms: int, overrides: dict[str, Any], seed: int
     """The SB3 VecEnv of a route (raw world frame on both)."""
     if route == "native":
         from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
-
-        from .settings import env_interface_kwargs
+        from train.settings import env_interface_kwargs
 
         world = env_interface_kwargs("world", {})
         return PairFlockSB3VecEnv(num_swarms=num_swarms, seed=seed, **world, **overrides)
@@ -146,7 +145,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _hyperparameters(args: argparse.Namespace) -> dict[str, Any]:
     """The training defaults of the algorithm, sized for a throughput run, plus ``--hp``."""
-    from .settings import DEFAULT_HYPERPARAMETERS, parse_assignment
+    from train.settings import DEFAULT_HYPERPARAMETERS, parse_assignment
 
     hp = {k: v for k, v in DEFAULT_HYPERPARAMETERS[args.algo].items() if k != "action_noise_std"}
     hp["policy_kwargs"] = dict(hp.get("policy_kwargs", {}))
@@ -231,8 +230,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _configs(args: argparse.Namespace) -> int:
     """``--config`` mode: the training speed of run configs."""
     from baselines.evaluation.io import run_record, write_json
-
-    from .config_speed import report, run_configs
+    from train.config_speed import report, run_configs
 
     for path in args.config:
         if not path.is_file():

@@ -15,11 +15,11 @@ This layer imports only :mod:`pairflock_env` (never evaluation, reporting or tra
 
 from __future__ import annotations
 
-from .base import PairPolicy, ZeroPolicy, resolve_env
-from .braking import BrakingCurveController
-from .proportional import ProportionalController
-from .registry import POLICIES, make_pair_policy
-from .sliding_mode import SlidingModeController
+from baselines.controllers.base import PairPolicy, ZeroPolicy, resolve_env
+from baselines.controllers.braking import BrakingCurveController
+from baselines.controllers.proportional import ProportionalController
+from baselines.controllers.registry import POLICIES, make_pair_policy
+from baselines.controllers.sliding_mode import SlidingModeController
 
 __all__ = [
     "POLICIES",

@@ -38,7 +38,7 @@ so the pair meets beside the flock and rejoins it together. Both members compute
 agree; a midpoint already farther than ``H`` is left alone. When ``c`` is on the axis
 (``c_perp = 0``, e.g. the paper's corner start, whose leader lies on the diagonal), the
 member farther from the leader takes its ``+e_t`` (the pair frame's first tangent,
-:func:`~pairflock_env.learning.pair_basis`) and the nearer one its ``-e_t``: the same world
+:func:`~pairflock_env.interfaces.pair_basis`) and the nearer one its ``-e_t``: the same world
 direction for both, and one that a policy in the pair frame can observe (with the leader at
 the midpoint, neither side is preferred and there is no detour). ``u_i`` is the
 relative law scaled into the ball, plus ``g``, scaled into the ball again.
@@ -50,9 +50,8 @@ from typing import Any
 
 import numpy as np
 
-from pairflock_env.learning import pair_basis, pair_feedforward
-
-from .base import PairPolicy, gain_value
+from baselines.controllers.base import PairPolicy, gain_value
+from pairflock_env.interfaces import pair_basis, pair_feedforward
 
 __all__ = ["BrakingCurveController"]
 

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .base import PairPolicy, gain_value
+from baselines.controllers.base import PairPolicy, gain_value
 
 __all__ = ["ProportionalController"]
 

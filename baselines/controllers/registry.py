@@ -6,10 +6,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from .base import ZeroPolicy
-from .braking import BrakingCurveController
-from .proportional import ProportionalController
-from .sliding_mode import SlidingModeController
+from baselines.controllers.base import ZeroPolicy
+from baselines.controllers.braking import BrakingCurveController
+from baselines.controllers.proportional import ProportionalController
+from baselines.controllers.sliding_mode import SlidingModeController
 
 __all__ = ["POLICIES", "make_pair_policy"]
 
@@ -17,7 +17,7 @@ __all__ = ["POLICIES", "make_pair_policy"]
 def _sb3_policy(path: str, env: Any, **gains: Any) -> Any:
     """``"sb3:<path>"``: a model saved by ``python -m train``, or ``"sb3:<name>"``: a packaged
     policy (:mod:`baselines.controllers.zoo`); imports SB3/torch lazily."""
-    from .sb3 import load_sb3_policy
+    from baselines.controllers.sb3 import load_sb3_policy
 
     return load_sb3_policy(path, env, **gains)
 

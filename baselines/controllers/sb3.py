@@ -4,7 +4,7 @@
 policy that ships with the package (:mod:`baselines.controllers.zoo`).
 
 The model was trained on the observation/action of a learning interface
-(:mod:`pairflock_env.learning`, stored in the model file by ``python -m train``); the adapter
+(:mod:`pairflock_env.interfaces`, stored in the model file by ``python -m train``); the adapter
 applies the same interface, so it takes the env's standard (physical, world-frame)
 observation and returns the env's standard action, like the analytic controllers::
 
@@ -21,10 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from pairflock_env.decision import DecisionHold
-
-from .base import check_observation, resolve_env
-from .zoo import resolve_model
+from baselines.controllers.base import check_observation, resolve_env
+from baselines.controllers.zoo import resolve_model
+from pairflock_env.interfaces.hold import DecisionHold
 
 __all__ = ["ALGORITHMS", "METADATA_KEY", "SB3PairPolicy", "load_sb3_policy", "read_metadata"]
 
@@ -73,7 +72,7 @@ class SB3PairPolicy:
     """
 
     def __init__(self, model: Any, env: Any, interface: dict[str, Any]) -> None:
-        from pairflock_env.learning import interface_from_dict
+        from pairflock_env.interfaces import interface_from_dict
 
         self.config, self.layout = resolve_env(env)
         self.model = model

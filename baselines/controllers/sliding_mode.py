@@ -20,9 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from pairflock_env.pairing import sliding_surface
-
-from .base import PairPolicy, gain_value
+from baselines.controllers.base import PairPolicy, gain_value
+from pairflock_env.task.pairing import sliding_surface
 
 __all__ = ["SMC_DEFAULTS", "SlidingModeController"]
 

@@ -15,10 +15,9 @@ from typing import Any
 
 import numpy as np
 
+from baselines.evaluation.parallel import imap_unordered, pin_threads
+from baselines.evaluation.specs import PolicySpec
 from pairflock_env import PairFlockConfig
-
-from .parallel import imap_unordered, pin_threads
-from .specs import PolicySpec
 
 __all__ = ["BACKENDS", "Job", "make_jobs", "run_job", "run_jobs"]
 
@@ -81,7 +80,7 @@ def run_job(job: Job) -> dict[str, Any]:
     pin_threads()
     import time
 
-    from .rollout import rollout, trace_metrics
+    from baselines.evaluation.rollout import rollout, trace_metrics
 
     cpu0, wall0 = time.process_time(), time.perf_counter()
     policy = job.spec.build(job.config)

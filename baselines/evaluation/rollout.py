@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from pairflock_env import PairFlockConfig, PairFlockCore
-from pairflock_env.metrics import pair_episode_metrics, pair_safety_metrics
+from pairflock_env.task.metrics import pair_episode_metrics, pair_safety_metrics
 
 __all__ = ["Trace", "rollout", "trace_metrics"]
 
@@ -207,10 +207,10 @@ def rollout(
 def trace_metrics(tr: Trace, *, safety_metrics: bool | None = None, **kwargs: Any):
     """Metrics of every (swarm, pair) of a trace, one dict each (with ``seed`` and ``pair``).
 
-    ``safety_metrics`` adds the columns of :data:`~pairflock_env.metrics.SAFETY_METRIC_DOCS`
+    ``safety_metrics`` adds the columns of :data:`~pairflock_env.task.metrics.SAFETY_METRIC_DOCS`
     (default: when the trace's config has ``safety_filter`` on; pass True for the same columns
     in every run of a comparison with the filter off and on). ``kwargs`` go to
-    :func:`~pairflock_env.metrics.pair_episode_metrics`."""
+    :func:`~pairflock_env.task.metrics.pair_episode_metrics`."""
     cfg = tr.config
     if safety_metrics is None:
         safety_metrics = cfg.safety_filter != "none"

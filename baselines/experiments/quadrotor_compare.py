@@ -17,7 +17,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
-from ._paired_cli import add_bootstrap_options, run_paired
+from baselines.experiments._paired_cli import add_bootstrap_options, run_paired
 
 __all__ = ["build_parser", "main"]
 

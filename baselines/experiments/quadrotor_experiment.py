@@ -34,10 +34,9 @@ from pathlib import Path
 from typing import Any
 
 from baselines.evaluation.parallel import imap_unordered, pin_threads
+from baselines.experiments.quadrotor_runs import PRESET, STRAIGHT_WINDOWS, run_job, scenario_metrics
 from baselines.reporting.criteria import QUADROTOR, check_quadrotor
 from baselines.reporting.tables import stat_cell, summary_table
-
-from .quadrotor_runs import PRESET, STRAIGHT_WINDOWS, run_job, scenario_metrics
 
 __all__ = [
     "CRITERIA",

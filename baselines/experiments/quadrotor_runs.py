@@ -17,7 +17,7 @@ Per seed it measures (times in s, distances in m):
   is off): whether a large turn peak is the filter's deflection or the controller's own
   tracking after it;
 
-plus the general episode metrics of ``pairflock_env.metrics`` and, for the quadrotor, how
+plus the general episode metrics of ``pairflock_env.task.metrics`` and, for the quadrotor, how
 often the paired UAVs fly at the acceleration/tilt limit or saturate a motor.
 """
 

@@ -19,7 +19,7 @@ __all__ = ["check_paper_claims", "main", "summarize"]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    from .benchmark import main as benchmark_main
+    from baselines.experiments.benchmark import main as benchmark_main
 
     argv = list(sys.argv[1:] if argv is None else argv)
     # the user's own --suite/--out (later on the line) win over these defaults

@@ -22,7 +22,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from ._paired_cli import add_bootstrap_options, run_paired
+from baselines.experiments._paired_cli import add_bootstrap_options, run_paired
 
 __all__ = ["build_parser", "main"]
 

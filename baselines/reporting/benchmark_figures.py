@@ -15,9 +15,7 @@ import numpy as np
 
 from baselines.evaluation.io import atomic_write_bytes
 from baselines.evaluation.specs import slug
-from pairflock_env.metrics import METRIC_DOCS
-
-from .figures import (
+from baselines.reporting.figures import (
     error_figure,
     policy_styles,
     save_figure,
@@ -26,6 +24,7 @@ from .figures import (
     surface_panels_figure,
     trajectories_3d_figure,
 )
+from pairflock_env.task.metrics import METRIC_DOCS
 
 __all__ = ["load_traces", "make_figures", "save_traces"]
 

@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from .quadrotor_criteria import QUADROTOR, QuadrotorCriteria, check_quadrotor
-from .tables import md_escape, stat_cell
+from baselines.reporting.quadrotor_criteria import QUADROTOR, QuadrotorCriteria, check_quadrotor
+from baselines.reporting.tables import md_escape, stat_cell
 
 __all__ = [
     "GENERALIST",

@@ -155,7 +155,7 @@ def euler_figure(t, R_des, R, title: str, zoom: tuple[float, float] = (0.0, 10.0
 # --------------------------------------------------------------------------- the figure set
 def _recorded_figures(key, job, seed, out: Path, dpi: int) -> list[Path]:
     """Snapshots and 3-D trajectories of the recorded run of ``job`` (the main combination)."""
-    from .figures import save_figure, trajectories_3d_figure
+    from baselines.reporting.figures import save_figure, trajectories_3d_figure
 
     cfg = job["config"]
     times = [0.0, 4.0, 8.0, 20.0, 21.0, 35.0, 51.0, float(job["t"][-1])]
@@ -191,7 +191,7 @@ def figure_set(
 ) -> list[Path]:
     """The experiment's PNGs from its job results (``(dynamics, policy) -> run_job(...)``):
     snapshots, 3-D trajectories, sliding surface, pair error and Euler angles."""
-    from .figures import save_figure, surface_panels_figure
+    from baselines.reporting.figures import save_figure, surface_panels_figure
 
     main_key = ("quadrotor", "smc") if ("quadrotor", "smc") in jobs else next(iter(jobs))
     j = jobs[main_key]

@@ -14,7 +14,12 @@ from typing import Any
 
 import numpy as np
 
-from .quadrotor_criteria import CRITERIA_KEYS, QUADROTOR, QuadrotorCriteria, run_outcomes
+from baselines.reporting.quadrotor_criteria import (
+    CRITERIA_KEYS,
+    QUADROTOR,
+    QuadrotorCriteria,
+    run_outcomes,
+)
 
 __all__ = ["compare_runs", "mcnemar_exact", "paired_lines"]
 

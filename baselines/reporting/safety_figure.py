@@ -48,7 +48,7 @@ def closest_pass_figure(rows: Sequence[Mapping[str, Any]], path: Path, dpi: int 
     side (runs as dots), the safety distance as a dashed line; log scale. Returns ``path``."""
     from matplotlib.figure import Figure
 
-    from .figures import save_figure
+    from baselines.reporting.figures import save_figure
 
     policies = list(dict.fromkeys(r["policy"] for r in rows))
     groups = list(dict.fromkeys(_group_label(r) for r in rows))

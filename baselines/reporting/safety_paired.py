@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from pairflock_env.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
+from pairflock_env.task.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
 
 __all__ = ["PAIRED_METRICS", "compare_filter", "paired_figure", "paired_filter_lines"]
 
@@ -294,7 +294,7 @@ def paired_figure(result: Sequence[Mapping[str, Any]], path, dpi: int = 110):
     metric), one colour per setting, with y = x and the +-10 % lines; returns ``path``."""
     from matplotlib.figure import Figure
 
-    from .figures import save_figure
+    from baselines.reporting.figures import save_figure
 
     lead = [k for k in result[0]["group"] if len({str(r["group"][k]) for r in result}) > 1]
     panels = list(dict.fromkeys((r["group"]["policy"], r["metric"]) for r in result))

@@ -2,7 +2,7 @@
 
 One line per policy and scenario (the scenarios' sweep axes as leading columns, e.g. N, init,
 filter), from the per-run rows of a benchmark whose runs carry the safety columns
-(:data:`pairflock_env.metrics.SAFETY_METRIC_DOCS`).
+(:data:`pairflock_env.task.metrics.SAFETY_METRIC_DOCS`).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .tables import Keys, summary_table
+from baselines.reporting.tables import Keys, summary_table
 
 __all__ = ["SAFETY_METRICS", "has_safety_columns", "safety_table"]
 

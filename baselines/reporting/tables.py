@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from pairflock_env.metrics import METRIC_DOCS
+from pairflock_env.task.metrics import METRIC_DOCS
 
 __all__ = [
     "ACCURACY_METRICS",

@@ -41,11 +41,11 @@ rename a field, keep the old name in ``aliases=(...)``: user keywords then warn
 
 from __future__ import annotations
 
-from .fields import UnknownFieldError
-from .limits import LIMITS
-from .model import SCHEMA, ConfigSection, PairFlockConfig, field_names
-from .presets import PRESETS, make_config, preset_names
-from .sections.pairs import corner_diagonals
+from pairflock_env.config.fields import UnknownFieldError
+from pairflock_env.config.limits import LIMITS
+from pairflock_env.config.model import SCHEMA, ConfigSection, PairFlockConfig, field_names
+from pairflock_env.config.presets import PRESETS, make_config, preset_names
+from pairflock_env.config.sections.pairs import corner_diagonals
 
 __all__ = [
     "LIMITS",

@@ -13,12 +13,12 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from .fields import Field, fmt_num
-from .frame import FRAME_SCHEMA
-from .limits import LIMITS
-from .model import SCHEMA
-from .presets import PRESETS
-from .schema import Schema
+from pairflock_env.config.fields import Field, fmt_num
+from pairflock_env.config.limits import LIMITS
+from pairflock_env.config.model import SCHEMA
+from pairflock_env.config.presets import PRESETS
+from pairflock_env.config.schema import Schema
+from pairflock_env.interfaces.pair_frame_params import FRAME_SCHEMA
 
 __all__ = ["main", "render"]
 

@@ -7,10 +7,10 @@ from typing import Any
 
 import numpy as np
 
-from .schema import Record, Schema, declare_record
-from .sections import DERIVED, RULES, SECTIONS
-from .sections.flocking import repulsion_sigma2
-from .sections.swarm import episode_steps, physics_dt, uses_grid
+from pairflock_env.config.schema import Record, Schema, declare_record
+from pairflock_env.config.sections import DERIVED, RULES, SECTIONS
+from pairflock_env.config.sections.flocking import repulsion_sigma2
+from pairflock_env.config.sections.swarm import episode_steps, physics_dt, uses_grid
 
 __all__ = ["SCHEMA", "ConfigSection", "PairFlockConfig", "field_names"]
 

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from .fields import invalid
-from .model import SCHEMA, PairFlockConfig
+from pairflock_env.config.fields import invalid
+from pairflock_env.config.model import SCHEMA, PairFlockConfig
 
 __all__ = ["PRESETS", "make_config", "preset_names"]
 

@@ -29,7 +29,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .fields import Field, UnknownFieldError, fmt_num, show
+from pairflock_env.config.fields import Field, UnknownFieldError, fmt_num, show
 
 __all__ = ["Derived", "Record", "Rule", "Schema", "Section", "declare_record"]
 

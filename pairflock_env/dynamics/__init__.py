@@ -13,9 +13,9 @@ from typing import Protocol
 
 import numpy as np
 
-from ..config import PairFlockConfig
-from .particle import ParticleModel
-from .quadrotor import QuadrotorModel
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.dynamics.particle import ParticleModel
+from pairflock_env.dynamics.quadrotor import QuadrotorModel
 
 __all__ = ["VEHICLES", "ParticleModel", "QuadrotorModel", "VehicleModel", "make_vehicle"]
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config import PairFlockConfig
+from pairflock_env.config import PairFlockConfig
 
 __all__ = ["ParticleModel"]
 

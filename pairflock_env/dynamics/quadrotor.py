@@ -73,8 +73,8 @@ import math
 import numpy as np
 from numba import njit
 
-from ..config import PairFlockConfig
-from ..math3d import so3_exp_scalar
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.math3d import so3_exp_scalar
 
 __all__ = ["ROTOR_ANGLES_DEG", "ROTOR_SPIN", "QuadrotorModel", "QuadrotorParams"]
 

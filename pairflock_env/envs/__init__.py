@@ -10,11 +10,11 @@ the deprecated former names of the two vector envs.
 
 from typing import Any
 
-from ._common import deprecated_attr
-from .aec import PairFlockAECEnv
-from .parallel import PairFlockParallelEnv, agent_name, env, parallel_env, raw_env
-from .single import ENV_ID, PairFlockGymEnv
-from .vector import PairFlockGymVectorEnv
+from pairflock_env.envs._base import deprecated_attr
+from pairflock_env.envs.aec import PairFlockAECEnv
+from pairflock_env.envs.parallel import PairFlockParallelEnv, agent_name, env, parallel_env, raw_env
+from pairflock_env.envs.single import ENV_ID, PairFlockGymEnv
+from pairflock_env.envs.vector import PairFlockGymVectorEnv
 
 __all__ = [
     "ENV_ID",
@@ -38,7 +38,7 @@ _DEPRECATED = {
 def __getattr__(name: str) -> Any:
     namespace = globals()
     if name in ("PairFlockSB3VecEnv", "PairFlockVecEnv"):  # lazy: imports SB3 (and torch)
-        from . import sb3
+        from pairflock_env.envs import sb3
 
         if name == "PairFlockSB3VecEnv":
             return sb3.PairFlockSB3VecEnv

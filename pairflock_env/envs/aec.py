@@ -17,7 +17,7 @@ import numpy as np
 from pettingzoo.utils.conversions import parallel_to_aec_wrapper
 from pettingzoo.utils.wrappers import OrderEnforcingWrapper
 
-from .parallel import PairFlockParallelEnv
+from pairflock_env.envs.parallel import PairFlockParallelEnv
 
 __all__ = ["PairFlockAECEnv", "PairFlockOrderEnforcing"]
 

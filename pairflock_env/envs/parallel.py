@@ -10,12 +10,9 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from ..config import PairFlockConfig
-from ..core import AGENT_INFO_KEYS, SWARM_INFO_KEYS
-from ..observations import ObsLayout
-from ..seeding import check_seed
-from ..spaces import StateLayout, global_state, state_bounds
-from ._common import (
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.core import AGENT_INFO_KEYS, SWARM_INFO_KEYS
+from pairflock_env.envs._base import (
     RENDER_MODES,
     UNSET,
     SwarmFrames,
@@ -25,6 +22,9 @@ from ._common import (
     held_step,
     resolve_interface_args,
 )
+from pairflock_env.seeding import check_seed
+from pairflock_env.task.observations import ObsLayout
+from pairflock_env.task.spaces import StateLayout, global_state, state_bounds
 
 __all__ = ["PairFlockParallelEnv", "agent_name", "env", "parallel_env", "raw_env"]
 
@@ -53,7 +53,7 @@ the agents' actions. The paper's sliding-mode controller (eq. 28), its proportio
 
 ## Interfaces
 ``interface="world"`` (default) is the physical env below. ``interface="pair"`` gives each
-agent the learning interface of the Gymnasium view (:mod:`pairflock_env.learning`): the
+agent the learning interface of the Gymnasium view (:mod:`pairflock_env.interfaces`): the
 normalised pair-frame observation in ``[-5, 5]``, a pair-frame action on top of a
 feed-forward, the bounded pair-frame reward, and one ``step`` per policy decision (the action
 is held for ``decision_period`` control steps, the reward is their mean).
@@ -69,7 +69,7 @@ non-numeric dtype, or a missing/unknown agent raise an exception and leave the e
 
 ## Observation space
 ``Box(low, high, (obs_size,), float32)``, physical units, relative to the observing UAV, with
-finite bounds derived from the config (:mod:`pairflock_env.spaces`: positions within
+finite bounds derived from the config (:mod:`pairflock_env.task.spaces`: positions within
 ``divergence_limit``, flocking commands bounded by the gains). The layout below is for
 dim = 2 and ``obs_neighbors`` = 6; read fields by name with
 ``env.layout.get(obs, "partner_offset")``.
@@ -84,7 +84,7 @@ the observation; a diverged swarm's state, at the end of its episode, is clipped
 {state_table}
 
 ## Rewards
-Per agent, a sum of penalties (see ``pairflock_env.rewards``):
+Per agent, a sum of penalties (see ``pairflock_env.task.rewards``):
 ``-w_err |pair error| - w_u (||u|| / limit)^2 - w_sep max(0, safe - sep)/safe
 - w_col [sep < collision_distance]``; ``-100`` on the step a swarm diverges. The scale is
 metres of pair error per control step: about -250 per agent-step at the paper's start and
@@ -369,7 +369,7 @@ def parallel_env(**kwargs: Any) -> PairFlockParallelEnv:
 def raw_env(**kwargs: Any):
     """The AEC env over the parallel env (order enforced; see
     :class:`~pairflock_env.envs.aec.PairFlockAECEnv`)."""
-    from .aec import PairFlockAECEnv, PairFlockOrderEnforcing
+    from pairflock_env.envs.aec import PairFlockAECEnv, PairFlockOrderEnforcing
 
     return PairFlockOrderEnforcing(PairFlockAECEnv(parallel_env(**kwargs)))
 

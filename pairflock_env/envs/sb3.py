@@ -22,10 +22,9 @@ except ImportError as e:  # pragma: no cover - depends on the install
         "pairflock_env.envs.sb3 needs stable-baselines3: pip install 'pairflock-env[train]'"
     ) from e
 
-from ..config import PairFlockConfig
-from ..core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, check_count
-from ..seeding import offset_seeds
-from ._common import (
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, check_count
+from pairflock_env.envs._base import (
     RENDER_MODES,
     UNSET,
     SwarmFrames,
@@ -37,7 +36,8 @@ from ._common import (
     held_step,
     resolve_interface_args,
 )
-from .parallel import agent_name
+from pairflock_env.envs.parallel import agent_name
+from pairflock_env.seeding import offset_seeds
 
 __all__ = ["AgentRow", "PairFlockSB3VecEnv"]
 
@@ -177,7 +177,7 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
     ``num_swarms * M``. (Formerly ``PairFlockVecEnv``, a deprecated alias.)
 
     Observation/action/reward of a row are those of the learning interface ``interface``
-    (:mod:`pairflock_env.learning`; ``"pair"`` by default, ``"world"`` for the raw env;
+    (:mod:`pairflock_env.interfaces`; ``"pair"`` by default, ``"world"`` for the raw env;
     parameters in ``interface_params``; ``frame`` / ``frame_params`` are deprecated aliases). One
     step is one policy decision: the action is held for the interface's ``decision_period``
     control steps and the reward is their mean.

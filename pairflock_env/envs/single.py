@@ -10,9 +10,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from ..config import PairFlockConfig
-from ..seeding import check_seed
-from ._common import (
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.envs._base import (
     RENDER_MODES,
     UNSET,
     SwarmFrames,
@@ -22,6 +21,7 @@ from ._common import (
     held_step,
     resolve_interface_args,
 )
+from pairflock_env.seeding import check_seed
 
 __all__ = ["ENV_ID", "PairFlockGymEnv"]
 
@@ -43,7 +43,7 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
     ``Box(-1, 1, (M * dim,), float32)``, M = 2 x pairs: the concatenated actions of the paired
     UAVs A0, B0, A1, B1, ... (``action.reshape(M, dim)`` gives one row per UAV; flat so that
     SB3's MLP policies take it as is). What a row means depends on ``interface`` (see
-    :mod:`pairflock_env.learning`):
+    :mod:`pairflock_env.interfaces`):
 
     * ``interface="pair"`` (default): the UAV's acceleration in its pair frame (radial toward the
       partner, tangential), ``accel_scale`` m/s^2 per unit, on top of a feed-forward that
@@ -60,10 +60,10 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
     ## Observation space
     ``Box(low, high, (M * n,), float32)``: ``obs.reshape(M, n)[m]`` is what UAV m sees.
     ``interface="pair"``: the normalised pair-frame features in [-5, 5] of
-    :class:`~pairflock_env.learning.PairFrameInterface`
+    :class:`~pairflock_env.interfaces.PairFrameInterface`
     (``env.unwrapped.interface.fields``); ``interface="world"``: the physical observation of
-    :class:`~pairflock_env.observations.ObsLayout` (``env.unwrapped.layout``), with finite
-    bounds derived from the config (:mod:`pairflock_env.spaces`). The physical observation
+    :class:`~pairflock_env.task.observations.ObsLayout` (``env.unwrapped.layout``), with finite
+    bounds derived from the config (:mod:`pairflock_env.task.spaces`). The physical observation
     (M, obs_size) is always available as ``env.unwrapped.physical_obs``.
 
     ## Rewards
@@ -87,7 +87,7 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
     ## Arguments
     ``preset`` (default ``"paper"``), ``config`` (a ``PairFlockConfig``), ``interface``
     (``"pair"`` or ``"world"``), ``interface_params`` (dict of
-    :class:`~pairflock_env.learning.PairFrameParams` fields), ``render_mode``
+    :class:`~pairflock_env.interfaces.PairFrameParams` fields), ``render_mode``
     (``"rgb_array"`` / ``"human"``), ``seed`` (of the swarm generator when ``reset`` gets
     none) and any ``PairFlockConfig`` field as a keyword. ``frame`` / ``frame_params`` are
     deprecated aliases of ``interface`` / ``interface_params``.

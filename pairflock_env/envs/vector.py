@@ -11,9 +11,8 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from ..config import PairFlockConfig
-from ..seeding import offset_seeds
-from ._common import (
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.envs._base import (
     RENDER_MODES,
     UNSET,
     SwarmFrames,
@@ -24,6 +23,7 @@ from ._common import (
     held_step,
     resolve_interface_args,
 )
+from pairflock_env.seeding import offset_seeds
 
 __all__ = ["PairFlockGymVectorEnv"]
 

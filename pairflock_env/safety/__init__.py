@@ -19,9 +19,15 @@ from every other UAV under the stated assumptions:
 and the batched numba kernel, :mod:`.params` the parameters.
 """
 
-from .barrier import SafetyFilter, SafetyOutput, safety_filter
-from .params import SafetyParams
-from .qp import STATUS_INFEASIBLE, STATUS_NOMINAL, STATUS_PROJECTED, max_margin, project
+from pairflock_env.safety.cbf.barrier import SafetyFilter, SafetyOutput, safety_filter
+from pairflock_env.safety.cbf.params import SafetyParams
+from pairflock_env.safety.cbf.qp import (
+    STATUS_INFEASIBLE,
+    STATUS_NOMINAL,
+    STATUS_PROJECTED,
+    max_margin,
+    project,
+)
 
 __all__ = [
     "STATUS_INFEASIBLE",

@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from ..neighbors import NeighborGrid
-from .barrier import SafetyFilter, SafetyOutput
-from .params import SafetyParams
+from pairflock_env.safety.cbf.barrier import SafetyFilter, SafetyOutput
+from pairflock_env.safety.cbf.params import SafetyParams
+from pairflock_env.swarm.grid import NeighborGrid
 
 __all__ = ["SAFETY_INFO_KEYS", "SafetyStage"]
 
@@ -83,7 +83,7 @@ class SafetyStage:
         """The per-agent infos of the last step (fresh arrays, ``SAFETY_INFO_KEYS``): whether
         the filter changed the command for safety, the size of the change (m/s^2) and
         whether no command within the bound met every constraint. None when the filter is
-        off or at a reset (nothing was filtered): :func:`~pairflock_env.step_result.make_info`
+        off or at a reset (nothing was filtered): :func:`~pairflock_env.task.infos.make_info`
         then reports zeros / False."""
         if not self.enabled or reset:
             return None

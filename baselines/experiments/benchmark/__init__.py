@@ -22,9 +22,9 @@ disturbance draws). Writes to ``--out``:
     *.png          paper-style figures;  episode_*.mp4|gif with --video
 """
 
-from .cli import PROG, Plan, build_parser, resolve
-from .run import main, replot, simulate
-from .suites import SHORTCUTS, SUITES, Suite
+from baselines.experiments.benchmark.cli import PROG, Plan, build_parser, resolve
+from baselines.experiments.benchmark.run import main, replot, simulate
+from baselines.experiments.benchmark.suites import SHORTCUTS, SUITES, Suite
 
 __all__ = [
     "PROG",

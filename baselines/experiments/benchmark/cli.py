@@ -13,8 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from baselines.evaluation.jobs import BACKENDS
-
-from .suites import SHORTCUTS, SUITES, Suite
+from baselines.experiments.benchmark.suites import SHORTCUTS, SUITES, Suite
 
 __all__ = ["PROG", "Plan", "build_parser", "resolve"]
 

@@ -11,9 +11,8 @@ from pathlib import Path
 from typing import Any
 
 from baselines.evaluation.parallel import pin_threads
-
-from .cli import PROG, Plan, build_parser, resolve
-from .summary import summary_markdown
+from baselines.experiments.benchmark.cli import PROG, Plan, build_parser, resolve
+from baselines.experiments.benchmark.summary import summary_markdown
 
 __all__ = ["Results", "main", "replot", "simulate"]
 
@@ -115,7 +114,7 @@ def _records(plan: Plan) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
 def _write_results(out: Path, plan: Plan, res: Results, sc_records, pol_records) -> None:
     from baselines.evaluation.io import atomic_write_text, dumps_stable, json_rows, write_csv
     from baselines.reporting.safety_table import has_safety_columns
-    from pairflock_env.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
+    from pairflock_env.task.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
 
     metric_cols = [k for k in res.rows[0] if k not in res.columns and k != "policy"]
     write_csv(out / "results.csv", res.rows, [*res.columns, "policy", *metric_cols])

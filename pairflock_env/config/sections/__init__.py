@@ -6,7 +6,16 @@ derived quantities are checked as soon as their fields are.
 
 from __future__ import annotations
 
-from . import flocking, leader, pairs, quadrotor, reward, safety, sensing, swarm
+from pairflock_env.config.sections import (
+    flocking,
+    leader,
+    pairs,
+    quadrotor,
+    reward,
+    safety,
+    sensing,
+    swarm,
+)
 
 __all__ = ["DERIVED", "RULES", "SECTIONS"]
 

@@ -7,9 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from ..fields import Field, Kind, Real, invalid, sequence_items
-from ..limits import MAX_DISTANCE, MAX_GAIN
-from ..schema import Derived, Rule, Section
+from pairflock_env.config.fields import Field, Kind, Real, invalid, sequence_items
+from pairflock_env.config.limits import MAX_DISTANCE, MAX_GAIN
+from pairflock_env.config.schema import Derived, Rule, Section
 
 __all__ = ["DERIVED", "RULES", "SECTIONS", "repulsion_sigma2"]
 

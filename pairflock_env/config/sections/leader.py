@@ -6,9 +6,18 @@ from typing import Any
 
 import numpy as np
 
-from ..fields import Choice, Field, Kind, OrNone, Real, Vector, invalid, sequence_items
-from ..limits import MAX_POSITION, MAX_SPEED, MAX_TIME, MAX_TURNS
-from ..schema import Rule, Section
+from pairflock_env.config.fields import (
+    Choice,
+    Field,
+    Kind,
+    OrNone,
+    Real,
+    Vector,
+    invalid,
+    sequence_items,
+)
+from pairflock_env.config.limits import MAX_POSITION, MAX_SPEED, MAX_TIME, MAX_TURNS
+from pairflock_env.config.schema import Rule, Section
 
 __all__ = ["RULES", "SECTIONS"]
 
@@ -72,7 +81,7 @@ LEADER = Section(
             "constant_velocity",
             "",
             'Leader trajectory: "constant_velocity" or "climb_and_turn" (Sec. VI-B: climb, level '
-            "off, smooth heading turns; see pairflock_env.leader.ClimbAndTurnLeader).",
+            "off, smooth heading turns; see pairflock_env.swarm.leader.ClimbAndTurnLeader).",
         ),
         Field(
             "leader_position",

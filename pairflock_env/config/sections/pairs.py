@@ -9,15 +9,25 @@ from typing import Any
 
 import numpy as np
 
-from ..fields import Auto, Box, Choice, Field, Kind, Real, Vector, invalid, sequence_items
-from ..limits import (
+from pairflock_env.config.fields import (
+    Auto,
+    Box,
+    Choice,
+    Field,
+    Kind,
+    Real,
+    Vector,
+    invalid,
+    sequence_items,
+)
+from pairflock_env.config.limits import (
     MAX_DISTANCE,
     MAX_GAIN,
     MAX_PLACEMENT_BYTES,
     MAX_POSITION,
     MAX_START_DENSITY,
 )
-from ..schema import Derived, Rule, Section
+from pairflock_env.config.schema import Derived, Rule, Section
 
 __all__ = [
     "DERIVED",

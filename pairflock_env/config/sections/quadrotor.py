@@ -11,10 +11,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from ..fields import Choice, Field, OrNone, Real, Vector
-from ..limits import MAX_POSITION, MAX_SUBSTEPS
-from ..schema import Derived, Rule, Section
-from .swarm import attitude_rate, physics_dt
+from pairflock_env.config.fields import Choice, Field, OrNone, Real, Vector
+from pairflock_env.config.limits import MAX_POSITION, MAX_SUBSTEPS
+from pairflock_env.config.schema import Derived, Rule, Section
+from pairflock_env.config.sections.swarm import attitude_rate, physics_dt
 
 __all__ = ["DERIVED", "RULES", "SECTIONS"]
 

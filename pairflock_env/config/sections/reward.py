@@ -7,9 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from ..fields import Field, Flag, Real
-from ..limits import MAX_DISTANCE, MAX_STEP_PENALTY, MAX_WEIGHT
-from ..schema import Derived, Rule, Section
+from pairflock_env.config.fields import Field, Flag, Real
+from pairflock_env.config.limits import MAX_DISTANCE, MAX_STEP_PENALTY, MAX_WEIGHT
+from pairflock_env.config.schema import Derived, Rule, Section
 
 __all__ = ["DERIVED", "RULES", "SECTIONS", "largest_step_penalty"]
 
@@ -53,7 +53,7 @@ REWARD = Section(
     "Reward, collisions and divergence",
     "r_i = -w_err |e_i| - w_u (||u_i|| / pair_accel_limit)^2 - w_sep max(0, D - s_i) / D "
     "- w_col [s_i < collision_distance], s_i the distance to the nearest non-partner UAV and "
-    "D = reward_separation_distance (pairflock_env.rewards).",
+    "D = reward_separation_distance (pairflock_env.task.rewards).",
     (
         Field("reward_error_weight", _WEIGHT, 1.0, "1/m", "Weight w_err of |pair error|."),
         Field(

@@ -8,9 +8,9 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
-from ..fields import Choice, Field, OrNone, Real
-from ..limits import MAX_DISTANCE, MAX_GAIN
-from ..schema import Rule, Section
+from pairflock_env.config.fields import Choice, Field, OrNone, Real
+from pairflock_env.config.limits import MAX_DISTANCE, MAX_GAIN
+from pairflock_env.config.schema import Rule, Section
 
 __all__ = [
     "BRAKE_SHARE",

@@ -5,21 +5,21 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..fields import Field, Int, Real
-from ..limits import (
+from pairflock_env.config.fields import Field, Int, Real
+from pairflock_env.config.limits import (
     MAX_DELAY_BYTES,
     MAX_GAIN,
     MAX_OBS_NEIGHBORS,
     MAX_PARTNER_DELAY,
     MAX_SWARM_BYTES,
 )
-from ..schema import Derived, Section
+from pairflock_env.config.schema import Derived, Section
 
 __all__ = ["DERIVED", "SECTIONS", "delay_buffer_bytes", "obs_size", "swarm_bytes"]
 
 
 def obs_size(dim: int, k: int) -> int:
-    """Length of one agent's observation (pairflock_env.observations.ObsLayout)."""
+    """Length of one agent's observation (pairflock_env.task.observations.ObsLayout)."""
     return 6 * dim + 2 + k * (2 * dim + 1)
 
 

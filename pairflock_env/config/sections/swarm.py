@@ -6,9 +6,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from ..fields import Auto, Choice, Field, Int, Kind, OrNone, Real
-from ..limits import MAX_EPISODE_STEPS, MAX_SUBSTEPS, MAX_TIME, MAX_UAVS
-from ..schema import Derived, Rule, Section
+from pairflock_env.config.fields import Auto, Choice, Field, Int, Kind, OrNone, Real
+from pairflock_env.config.limits import MAX_EPISODE_STEPS, MAX_SUBSTEPS, MAX_TIME, MAX_UAVS
+from pairflock_env.config.schema import Derived, Rule, Section
 
 __all__ = [
     "DERIVED",

@@ -1,17 +1,17 @@
 """Declared parameters of the pair-frame learning interface (``frame="pair"``).
 
 :class:`PairFrameParams` is the second configuration of the project: the parameters of
-:class:`pairflock_env.learning.PairFrameInterface` (given as ``frame_params={...}`` to the
+:class:`pairflock_env.interfaces.PairFrameInterface` (given as ``frame_params={...}`` to the
 learning views and stored with every trained model). It is declared like
 :class:`~pairflock_env.config.PairFlockConfig` (type, unit, range, default and meaning per
 field), so that validation, messages and its table in ``docs/config.md`` come from one place.
-Users import it from :mod:`pairflock_env.learning`.
+Users import it from :mod:`pairflock_env.interfaces`.
 """
 
 from __future__ import annotations
 
-from .fields import Field, Flag, Int, OrNone, Real
-from .schema import Record, Schema, Section, declare_record
+from pairflock_env.config.fields import Field, Flag, Int, OrNone, Real
+from pairflock_env.config.schema import Record, Schema, Section, declare_record
 
 __all__ = ["FRAME_SCHEMA", "PairFrameParams"]
 
@@ -21,7 +21,7 @@ _ACCEL = OrNone(Real(1e-6, 1e6), "the config's pair_accel_limit, then stored")
 _FRAME_SECTION = Section(
     "pair_frame",
     "Pair-frame learning interface",
-    'interface="pair" (pairflock_env.learning); give them as interface_params={...}.',
+    'interface="pair" (pairflock_env.interfaces); give them as interface_params={...}.',
     (
         Field(
             "decision_period",
@@ -160,7 +160,7 @@ PairFrameParams = declare_record(
     "PairFrameParams",
     FRAME_SCHEMA,
     Record,
-    "pairflock_env.learning",  # where users import it from (and old pickles find it)
+    "pairflock_env.interfaces",  # where users import it from (and old pickles find it)
     """Parameters of :class:`PairFrameInterface` (units and ranges: docs/config.md).
 
     A frozen dataclass with keyword-only construction; unknown names raise ``TypeError`` with

@@ -9,7 +9,7 @@ two, both pure functions of the env's own observation and action (one implementa
 by every view and by the loader, so training and evaluation cannot drift apart):
 
 ``"world"``
-    the identity: raw observation, raw action, the core's reward (``pairflock_env.rewards``).
+    the identity: raw observation, raw action, the core's reward (``pairflock_env.task.rewards``).
 
 ``"pair"`` (:class:`PairFrameInterface`, the default for learning)
     *Frame.* Everything is expressed in the pair frame of the observing UAV: ``e_r`` points at
@@ -80,10 +80,10 @@ by every view and by the loader, so training and evaluation cannot drift apart):
     decisions, not 350) and cuts the network's cost per simulated second, which is what lets
     PPO learn the task in minutes; the flocking protocol, the physics and the feed-forward
     still run at the paper's 100 Hz. The ``sb3:`` loader holds the action the same way
-    (through SB3's ``predict`` state); both use :class:`pairflock_env.decision.DecisionHold`.
+    (through SB3's ``predict`` state); both use :class:`pairflock_env.interfaces.hold.DecisionHold`.
 
 Each interface declares the box of its observations (:meth:`LearningInterface.observation_bounds`:
-the physical bounds of :mod:`pairflock_env.spaces` for ``"world"``, [-5, 5] for ``"pair"``)
+the physical bounds of :mod:`pairflock_env.task.spaces` for ``"world"``, [-5, 5] for ``"pair"``)
 and the range of its reward (``reward_range``), both derived from the config.
 ``make_interface(name, config, **params)`` builds one; ``interface.to_dict()`` /
 ``interface_from_dict(d, config)`` store it with a trained model so that the loader rebuilds
@@ -98,12 +98,12 @@ from typing import Any
 
 import numpy as np
 
-from .config import PairFlockConfig
-from .config.fields import UnknownFieldError
-from .config.frame import FRAME_SCHEMA, PairFrameParams
-from .observations import ObsLayout
-from .rewards import DIVERGENCE_PENALTY
-from .spaces import (
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.config.fields import UnknownFieldError
+from pairflock_env.interfaces.pair_frame_params import FRAME_SCHEMA, PairFrameParams
+from pairflock_env.task.observations import ObsLayout
+from pairflock_env.task.rewards import DIVERGENCE_PENALTY
+from pairflock_env.task.spaces import (
     core_reward_range,
     pair_error_bound,
     physical_observation_bounds,
@@ -304,13 +304,13 @@ class WorldInterface(LearningInterface):
 
     def observation_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """The physical observation's box, derived from the config
-        (:func:`~pairflock_env.spaces.physical_observation_bounds`)."""
+        (:func:`~pairflock_env.task.spaces.physical_observation_bounds`)."""
         low, high = self._box()
         return low.copy(), high.copy()
 
     @property
     def reward_range(self) -> tuple[float, float]:
-        """The core's reward range (:func:`~pairflock_env.spaces.core_reward_range`)."""
+        """The core's reward range (:func:`~pairflock_env.task.spaces.core_reward_range`)."""
         return core_reward_range(self.config)
 
     def encode(self, obs: np.ndarray) -> np.ndarray:
@@ -523,7 +523,7 @@ class PairFrameInterface(LearningInterface):
     @property
     def reward_range(self) -> tuple[float, float]:
         """(low, 0): the worst case of every term at once, with the largest pair error and
-        separation a non-diverged state allows (:func:`~pairflock_env.spaces.pair_error_bound`),
+        separation a non-diverged state allows (:func:`~pairflock_env.task.spaces.pair_error_bound`),
         or ``-DIVERGENCE_PENALTY``. Typical rewards are of order one per control step (see
         ``docs/clients.md``), far inside this guaranteed range."""
         p = self.params

@@ -16,12 +16,12 @@ the interaction graph (union-find), the velocity mismatch to the leader, and a p
 flag for non-finite or runaway states.
 
 Two ways to find the pairs, same results: all pairs (O(N^2) per swarm), or a
-:class:`~pairflock_env.neighbors.NeighborGrid` (O(N) per swarm for a flock of bounded
+:class:`~pairflock_env.swarm.grid.NeighborGrid` (O(N) per swarm for a flock of bounded
 density). The grid path visits the pairs of each UAV i with j > i in increasing j, exactly as
 the all-pairs loop does, so every floating-point sum is formed in the same order and the two
 paths agree bit for bit. Swarms a grid cannot hold (non-finite coordinates) use all pairs.
 The per-pair sweep for observations and eq. 28 (``pair_pass``) lives in
-:mod:`pairflock_env.pair_neighbors` and is re-exported here.
+:mod:`pairflock_env.swarm.pair_pass` and is re-exported here.
 
 This is the only implementation of these equations; every view and vehicle model calls it.
 The kernels run single-threaded under numba (compiled code is cached on disk); the small
@@ -34,8 +34,8 @@ from collections import namedtuple
 
 import numpy as np
 
-from .config import PairFlockConfig
-from .neighbors import (
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
     check_grid,
@@ -46,7 +46,7 @@ from .neighbors import (
     one_ring,
     ring_bound2,
 )
-from .pair_neighbors import pair_pass  # re-exported: the pair sweep lived here before
+from pairflock_env.swarm.pair_pass import pair_pass  # re-exported: the pair sweep lived here before
 
 __all__ = ["FlockScalars", "FlockingParams", "flocking_pass", "pair_pass"]
 
@@ -341,7 +341,7 @@ def flocking_pass(
         pinned: h_i of eq. 6 as 0/1 floats, (B, N).
         partner: partner index of each UAV or -1, (N,) int64.
         out: preallocated outputs to reuse (as returned by a previous call).
-        grid: ``None`` for all pairs, or a :class:`~pairflock_env.neighbors.NeighborGrid`
+        grid: ``None`` for all pairs, or a :class:`~pairflock_env.swarm.grid.NeighborGrid`
             with ``cell_size >= max(radius, collision_distance)``, built from ``q``'s current
             values. Both give identical results.
 

@@ -505,8 +505,8 @@ class NeighborGrid:
     change: a grid describes the positions it was last built from (it keeps a reference to
     that array, not a copy). One thread at a time per grid (queries share scratch space).
 
-    The sweeps (:func:`~pairflock_env.flocking.flocking_pass`,
-    :func:`~pairflock_env.pair_neighbors.pair_pass`) take a grid as ``grid=``; other code
+    The sweeps (:func:`~pairflock_env.swarm.flocking.flocking_pass`,
+    :func:`~pairflock_env.swarm.pair_pass.pair_pass`) take a grid as ``grid=``; other code
     asks :meth:`within` / :meth:`neighbors_of`, or, inside numba, calls
     ``within_radius(q, b, point, r2, exclude, GridArrays(*grid.arrays), out)``.
 

@@ -4,7 +4,7 @@ the barrier constraints with the batched filter loop (:mod:`.barrier`, docs/safe
 They live in one module on purpose: numba's on-disk cache keys a compiled function on its
 own source file only, so a kernel calling a jitted function from another file could keep
 running a stale compiled copy of it after that file changed. The one call out is the grid
-query ``within_radius`` of :mod:`pairflock_env.neighbors` (one neighbour search for the whole
+query ``within_radius`` of :mod:`pairflock_env.swarm.grid` (one neighbour search for the whole
 project), as in the flocking sweeps: after editing ``neighbors.py``, clear the numba cache
 (the ``__pycache__`` folders) before trusting a run of the filter on the grid.
 """
@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..neighbors import within_radius
+from pairflock_env.swarm.grid import within_radius
 
 #: the nominal command satisfied every constraint and the bound (returned unchanged)
 STATUS_NOMINAL = 0
@@ -522,7 +522,7 @@ def _constrain_one(
 
 # Called once per UAV and agent, so compiled without numba's reference counting (it never
 # allocates): the count updates numba adds around a call taking arrays cost several times the
-# call itself (as in pairflock_env.neighbors).
+# call itself (as in pairflock_env.swarm.grid).
 @njit(cache=True, nogil=True, _nrt=False)
 def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt, vo, vc, M):
     """Fill G, rhs with agent i's non-redundant constraints; return (count, min H, ok).

@@ -15,7 +15,7 @@ finite observation and its episode ends). From that and the config follow finite
   1e-15 per draw) values beyond it into the box.
 
 :func:`physical_observation_bounds` gives the box of the physical observation
-(:class:`~pairflock_env.observations.ObsLayout`), :class:`StateLayout` /
+(:class:`~pairflock_env.task.observations.ObsLayout`), :class:`StateLayout` /
 :func:`state_bounds` / :func:`global_state` the centralised-critic state of the PettingZoo
 views. Bounds are float32 (rounded outward) and at most float32's largest finite value, as
 the observations are float32 and finite. A leader type without a known bound gives infinite
@@ -28,9 +28,9 @@ import dataclasses
 
 import numpy as np
 
-from .config import PairFlockConfig
-from .observations import ObsLayout
-from .rewards import DIVERGENCE_PENALTY
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.task.observations import ObsLayout
+from pairflock_env.task.rewards import DIVERGENCE_PENALTY
 
 __all__ = [
     "NOISE_SIGMAS",
@@ -134,7 +134,7 @@ def separation_bound(cfg: PairFlockConfig) -> float:
 
 
 def core_reward_range(cfg: PairFlockConfig) -> tuple[float, float]:
-    """(low, 0): the range of the core's per-agent reward (:mod:`pairflock_env.rewards`).
+    """(low, 0): the range of the core's per-agent reward (:mod:`pairflock_env.task.rewards`).
 
     Per control step and agent the reward is ``-w_err |e|`` (|e| up to
     :func:`pair_error_bound`) minus effort (at most ``w_u dim``), separation (at most ``w_sep``)

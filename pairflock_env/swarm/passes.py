@@ -1,12 +1,12 @@
 """The neighbour sweep of one state: every consumer of neighbours served from one search.
 
 :class:`NeighborSweep` owns the search the config asks for (``neighbor_search``: all pairs,
-or a :class:`~pairflock_env.neighbors.NeighborGrid` rebuilt from the positions before each
+or a :class:`~pairflock_env.swarm.grid.NeighborGrid` rebuilt from the positions before each
 sweep) and the output buffers of the two sweeps that read it:
 
-* :func:`~pairflock_env.flocking.flocking_pass`: the flocking command (eqs. 11-19), each
+* :func:`~pairflock_env.swarm.flocking.flocking_pass`: the flocking command (eqs. 11-19), each
   UAV's nearest non-partner distance, collisions and the largest connected component;
-* :func:`~pairflock_env.pair_neighbors.pair_pass`: the shared-neighbour count of eq. 28 and
+* :func:`~pairflock_env.swarm.pair_pass.pair_pass`: the shared-neighbour count of eq. 28 and
   each agent's K nearest UAVs (the observation's neighbour slots).
 
 Both paths give the same results (the grid visits the same pairs in the same summation
@@ -19,10 +19,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .config import PairFlockConfig
-from .flocking import FlockingParams, flocking_pass, pair_pass
-from .neighbors import NeighborGrid
-from .pairing import agent_pair_state
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pass
+from pairflock_env.swarm.grid import NeighborGrid
+from pairflock_env.task.pairing import agent_pair_state
 
 __all__ = ["NeighborSweep", "make_grid"]
 
@@ -73,9 +73,9 @@ class NeighborSweep:
     ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
         """Sweep the state q, p (B, N, dim) with the leader at ``leader_q``, ``leader_p``.
 
-        Returns the flocking outputs (:func:`~pairflock_env.flocking.flocking_pass`) and the
+        Returns the flocking outputs (:func:`~pairflock_env.swarm.flocking.flocking_pass`) and the
         agents' pair quantities (B, M): those of
-        :func:`~pairflock_env.pairing.agent_pair_state`, plus ``min_separation`` (distance to
+        :func:`~pairflock_env.task.pairing.agent_pair_state`, plus ``min_separation`` (distance to
         the nearest non-partner UAV, m) and ``shared_neighbors`` (eq. 28). The observation's
         neighbour slots are in :attr:`pair_out`.
         """

@@ -44,7 +44,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._kernels import (
+from pairflock_env.safety.cbf.kernels import (
     STATUS_INFEASIBLE,
     STATUS_NOMINAL,
     STATUS_PROJECTED,

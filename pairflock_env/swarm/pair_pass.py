@@ -1,7 +1,7 @@
 """The pair sweep: shared neighbours of each pair (eq. 28) and each agent's K nearest UAVs.
 
 Like the flocking sweep it runs over all pairs or over a
-:class:`~pairflock_env.neighbors.NeighborGrid`, with identical results: the shared count is
+:class:`~pairflock_env.swarm.grid.NeighborGrid`, with identical results: the shared count is
 an integer over the same distance tests, and the K nearest are the K smallest
 (squared distance, index) pairs whatever order the candidates are found in.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .neighbors import (
+from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
     check_grid,
@@ -116,7 +116,7 @@ def pair_pass(
     Args:
         agents: UAV index of each agent, (M,) with pairs laid out as A0, B0, A1, B1, ...
         partners: partner UAV index of each agent, (M,).
-        grid: ``None`` for all pairs, or a :class:`~pairflock_env.neighbors.NeighborGrid`
+        grid: ``None`` for all pairs, or a :class:`~pairflock_env.swarm.grid.NeighborGrid`
             with ``cell_size >= radius`` built from ``q``'s current values (same results).
 
     Returns:

@@ -12,11 +12,11 @@ from typing import Any
 
 import numpy as np
 
-from ..actions import real_array
-from ..config import PairFlockConfig
-from ..core import PairFlockCore
-from ..decision import DecisionHold
-from ..learning import INTERFACES, LearningInterface, make_interface
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.core import PairFlockCore
+from pairflock_env.interfaces import INTERFACES, LearningInterface, make_interface
+from pairflock_env.interfaces.hold import DecisionHold
+from pairflock_env.task.actions import real_array
 
 __all__ = [
     "RENDER_MODES",
@@ -109,7 +109,7 @@ def check_policy_actions(actions: Any, shape: tuple[int, ...], name: str = "acti
     """Policy actions as float64 of exactly ``shape``; TypeError/ValueError naming ``name``
     otherwise.
 
-    :func:`~pairflock_env.actions.real_array` rejects NaN/inf and saturates finite values
+    :func:`~pairflock_env.task.actions.real_array` rejects NaN/inf and saturates finite values
     beyond float64's range (``np.longdouble("1e400")``, huge ints) to +-float64 max, so the
     result is always finite: one check per action, nothing to repeat here.
     """
@@ -161,7 +161,7 @@ def held_step(
     """Apply checked policy actions (B, M, dim) for ``interface.decision_period`` control steps.
 
     Each control step decodes the held policy action against the fresh physical observation
-    (:class:`~pairflock_env.decision.DecisionHold`) and steps the core. A swarm whose episode
+    (:class:`~pairflock_env.interfaces.hold.DecisionHold`) and steps the core. A swarm whose episode
     ends part-way keeps its results from that step; while other swarms go on, it integrates
     with no pair term until the view resets it (the core steps all swarms together). The
     decision stops early once every swarm has ended, so a single swarm's state stays at the
@@ -246,7 +246,7 @@ class SwarmFrames:
             return None
         if not self._ready:
             raise RuntimeError("call reset() before render(): there is no swarm to draw yet")
-        from ..render import SwarmRenderer
+        from pairflock_env.render import SwarmRenderer
 
         r = self._renderers.get(b)
         if r is None:

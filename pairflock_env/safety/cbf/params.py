@@ -7,8 +7,8 @@ import math
 import numbers
 from typing import Any
 
-from ..config.sections import safety as _section
-from ..config.sections.safety import BRAKE_SHARE, DECAY, OTHER_SHARE, SENSING_RADIUS
+from pairflock_env.config.sections import safety as _section
+from pairflock_env.config.sections.safety import BRAKE_SHARE, DECAY, OTHER_SHARE, SENSING_RADIUS
 
 __all__ = ["INTEGRATORS", "SafetyParams"]
 

@@ -15,7 +15,7 @@ from typing import Protocol
 import numpy as np
 from numba import njit
 
-from .config import PairFlockConfig
+from pairflock_env.config import PairFlockConfig
 
 __all__ = [
     "LEADERS",

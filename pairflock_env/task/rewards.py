@@ -22,8 +22,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .config import PairFlockConfig
-from .pairing import dot
+from pairflock_env.config import PairFlockConfig
+from pairflock_env.task.pairing import dot
 
 __all__ = [
     "DIVERGENCE_PENALTY",

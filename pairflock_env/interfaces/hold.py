@@ -2,7 +2,7 @@
 and the ``sb3:`` policy loader.
 
 A learning interface decides every ``decision_period`` control steps
-(:mod:`pairflock_env.learning`). In between, each row (a paired UAV) keeps its last policy
+(:mod:`pairflock_env.interfaces`). In between, each row (a paired UAV) keeps its last policy
 action, and every control step decodes that held action against the *fresh* physical
 observation, so the pair frame and the feed-forward stay current. The views hold for a whole
 decision inside one ``step``; the loader is called once per control step and carries the hold
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .learning import LearningInterface
+from pairflock_env.interfaces import LearningInterface
 
 __all__ = ["DecisionHold"]
 

@@ -9,7 +9,7 @@ Placement (``config.init``):
   UAVs, +-``swarm_half_width`` for unpaired ones, one ``rng.uniform(-1, 1, (n, dim))`` call;
 * with ``min_init_spacing`` > 0, every free UAV closer than that to a fixed UAV or to a UAV of
   lower index is redrawn (all such UAVs in one call per round), for at most 1,000 rounds; a
-  neighbour grid finds the conflicts (:mod:`~pairflock_env.grid_placement`), so a round
+  neighbour grid finds the conflicts (:mod:`~pairflock_env.swarm.spacing`), so a round
   costs O(N) time and memory;
 * the whole swarm is then shifted by ``swarm_center``; velocities start at zero.
 
@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from .config import PairFlockConfig, corner_diagonals
-from .grid_placement import redraw_conflicts
-from .neighbors import nearest_indices
+from pairflock_env.config import PairFlockConfig, corner_diagonals
+from pairflock_env.swarm.grid import nearest_indices
+from pairflock_env.swarm.spacing import redraw_conflicts
 
 __all__ = [
     "MAX_PLACEMENT_ROUNDS",

@@ -33,9 +33,9 @@ import functools
 import numpy as np
 import numpy.typing as npt
 
-from ..neighbors import NeighborGrid
-from ._kernels import _filter_kernel
-from .params import SafetyParams
+from pairflock_env.safety.cbf.kernels import _filter_kernel
+from pairflock_env.safety.cbf.params import SafetyParams
+from pairflock_env.swarm.grid import NeighborGrid
 
 __all__ = ["SafetyFilter", "SafetyOutput", "safety_filter"]
 
@@ -155,7 +155,7 @@ class SafetyFilter:
             flock_accel: (B, M, dim) each agent's own flocking command f_i, m/s^2.
             u_nom: (B, M, dim) nominal pair commands, m/s^2 (finite).
             out: arrays to fill (from :meth:`allocate`); new ones when None.
-            grid: optional :class:`~pairflock_env.neighbors.NeighborGrid` built from these
+            grid: optional :class:`~pairflock_env.swarm.grid.NeighborGrid` built from these
                 positions ``q``: each agent then looks only at the UAVs the grid finds within
                 its ranges (and its partner), O(M k) per swarm instead of O(M N), with the
                 same result bit for bit. Swarms the grid does not hold, or whose state is

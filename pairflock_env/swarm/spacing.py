@@ -4,7 +4,7 @@ The rejection sampler is the one the core has always used, so every random draw,
 therefore every initial state, stays the same: draw every free UAV uniformly in its start
 box; then, round after round, redraw (in index order, one ``uniform`` call per round) every
 free UAV that is closer than the spacing to a fixed UAV or to a UAV of lower index. Only the
-conflict test changed: a :class:`~pairflock_env.neighbors.NeighborGrid` with cells of the
+conflict test changed: a :class:`~pairflock_env.swarm.grid.NeighborGrid` with cells of the
 spacing finds the same conflicting set as the N x N distance matrix did, comparing the same
 floating-point squared distances.
 """
@@ -13,7 +13,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .neighbors import GridArrays, NeighborGrid, dist2, jit_inline, jit_kernel, one_ring
+from pairflock_env.swarm.grid import (
+    GridArrays,
+    NeighborGrid,
+    dist2,
+    jit_inline,
+    jit_kernel,
+    one_ring,
+)
 
 __all__ = ["place", "redraw_conflicts"]
 
