@@ -9,7 +9,7 @@
 Reports UAV-steps/s (simulated UAVs x control steps per wall second) of
 ``PairFlockCore.step`` for N in {20, 50, 100} x B in {1, 64, 256} (medians over repeats),
 env steps/s of the PettingZoo ``step()`` at B = 1, where the time of one core step goes, and
-the neighbour kernels alone (flocking and pair sweeps, plus the grid build on the grid path)
+the neighbour kernels alone (flocking and pair passs, plus the grid build on the grid path)
 with all pairs and with the grid, for N up to 10,000; the full core step of large swarms with
 each ``neighbor_search`` (``large``) and the crossover that sets "auto" (``threshold``).
 Everything runs on one thread (numba kernels are single-threaded; OMP/MKL pinned to 1).
@@ -51,7 +51,7 @@ def bench_core(N: int, B: int, repeats: int, min_time: float, search: str | None
     """UAV-steps/s of ``PairFlockCore.step`` from the reset state of the paper preset with
     N UAVs (start box grown with N), under small random pair actions."""
     cfg = make_config("paper", n_uavs=N, max_cycles=10**9, **_search(search))
-    core = PairFlockCore(cfg, num_envs=B)
+    core = PairFlockCore(cfg, num_swarms=B)
     core.reset(seed=0)
     rng = np.random.default_rng(0)
     actions = rng.uniform(-0.2, 0.2, (B, core.n_agents, cfg.dim))
@@ -68,7 +68,7 @@ def bench_pettingzoo(N: int, repeats: int, min_time: float) -> float:
 def breakdown(N: int, B: int, repeats: int, search: str | None = None) -> dict[str, float]:
     """Microseconds per control step spent in each part of ``PairFlockCore.step``."""
     cfg = make_config("paper", n_uavs=N, max_cycles=10**9, **_search(search))
-    core = PairFlockCore(cfg, num_envs=B)
+    core = PairFlockCore(cfg, num_swarms=B)
     core.reset(seed=0)
     lq, lp = core.leader_state()
     fl_out, pp_out = {}, {}
@@ -95,8 +95,8 @@ def breakdown(N: int, B: int, repeats: int, search: str | None = None) -> dict[s
     if grid is not None:
         parts["grid build (numba)"] = 1e6 / rate(build, 1, repeats, 0.2)
     parts |= {
-        "flocking sweep (numba)": 1e6 / rate(flock, 1, repeats, 0.2),
-        "pair/neighbour sweep (numba)": 1e6 / rate(pairs, 1, repeats, 0.2),
+        "flocking pass (numba)": 1e6 / rate(flock, 1, repeats, 0.2),
+        "pair/neighbour pass (numba)": 1e6 / rate(pairs, 1, repeats, 0.2),
         "integration (numpy)": 1e6 / rate(integrate, 1, repeats, 0.2),
     }
     # the rest of the step, by difference: parts timed alone can add up to a little more than
@@ -135,7 +135,7 @@ def kernel_state(kind: str, N: int, B: int, seed: int = 0):
 
 
 def bench_kernels(kind: str, N: int, B: int, grid: bool, repeats: int, min_time: float) -> float:
-    """UAV-steps/s of the neighbour kernels of one step (all pairs, or grid build + sweeps)."""
+    """UAV-steps/s of the neighbour kernels of one step (all pairs, or grid build + passes)."""
     from pairflock_env.swarm.grid import NeighborGrid
 
     cfg = make_config("paper", n_uavs=N)
@@ -200,7 +200,7 @@ def bench_rollout(
     """UAV-steps/s of ``steps`` core steps from state ``kind`` (reset untimed), the median
     over ``repeats`` rollouts (after one untimed rollout that compiles and warms up)."""
     cfg = make_config("paper", n_uavs=N, max_cycles=10**9, **_search(search))
-    core = PairFlockCore(cfg, num_envs=B)
+    core = PairFlockCore(cfg, num_swarms=B)
     actions = np.random.default_rng(0).uniform(-0.2, 0.2, (B, core.n_agents, cfg.dim))
     options = start_options(kind, N, B)
     rates = []

@@ -68,7 +68,7 @@ def bench_pettingzoo(repeats: int, min_time: float, with_policy: bool) -> float:
 def bench_core(B: int, repeats: int, min_time: float, dynamics: str = "quadrotor") -> float:
     """Swarm-seconds per wall second of ``PairFlockCore.step`` with B swarms."""
     cfg = _config(dynamics=dynamics)
-    core = PairFlockCore(cfg, num_envs=B)
+    core = PairFlockCore(cfg, num_swarms=B)
     core.reset(seed=0)
     actions = np.random.default_rng(0).uniform(-0.2, 0.2, (B, core.n_agents, 3))
     return median_rate(lambda: core.step(actions), B * cfg.dt, repeats, min_time)
@@ -134,7 +134,7 @@ def large_breakdown(N: int, repeats: int, min_time: float, clock) -> dict[str, f
     parts["quadrotor: substeps of controller + mixer + motors + rigid body (numba)"] = us(
         lambda: core.vehicle.advance(q.copy(), p.copy(), a_des)
     )
-    parts["neighbour sweep: grid build, flocking and pair sweeps (numba)"] = us(
+    parts["neighbour pass: grid build, flocking and pair passs (numba)"] = us(
         lambda: core._neighbors.run(core.q, core.p, lq, lp, core.pinned)
     )
     parts["rest: checks, observations, rewards, infos (numpy)"] = max(
@@ -160,7 +160,7 @@ def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
     """Microseconds per control step in each part of one step (B swarms); at B = 1 also the
     PettingZoo layer on top of the core."""
     cfg = _config()
-    core = PairFlockCore(cfg, num_envs=B)
+    core = PairFlockCore(cfg, num_swarms=B)
     core.reset(seed=0)
     M = core.n_agents
     actions = np.zeros((B, M, 3))
@@ -211,8 +211,8 @@ def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
         lambda: core.vehicle.advance(q, p, a_des)
     )
     parts["quadrotor info() (numpy)"] = us(core.vehicle.info)
-    parts["flocking sweep (numba)"] = us(flock)
-    parts["pair/neighbour sweep (numba)"] = us(pairs)
+    parts["flocking pass (numba)"] = us(flock)
+    parts["pair/neighbour pass (numba)"] = us(pairs)
     parts["climb-and-turn leader state (numba)"] = us(lambda: core.leader_state())
     inner = [k for k in parts if k not in ("total core.step",) and not k.startswith("PettingZoo")]
     parts["rest of core.step: checks, observations, rewards, infos (numpy)"] = parts[

@@ -29,8 +29,8 @@ closing speed.
 ``--in-step`` instead runs the sliding-mode controller with ``safety_filter="cbf"`` in the
 core (N = 100, B = 256 by default) from the reset through the pair's crossing of the swarm
 and times, in CPU time of this process, every stage of each ``core.step`` (validate,
-decode, the safety stage, desired acceleration, vehicle, sweep, observation, the rest of the
-refresh): the medians over steps of each part and of the safety stage's share of the whole
+decode, the safety stage, desired acceleration, vehicle, neighbour pass, observation, the rest
+of the refresh): the medians over steps of each part and of the safety stage's share of the whole
 step, over all steps and over the steps where some agent's filter was active.
 
 ``--vecenv`` measures what training sees: the SB3 VecEnv of the learned pair policy's task
@@ -66,7 +66,7 @@ from pairflock_env.safety import SafetyFilter, SafetyParams
 def states(N: int, B: int, limit: float, params: dict):
     """(config, core, filter, [(name, q, p, f, u_nom)]) for the three benchmark states."""
     cfg = make_config("paper", n_uavs=N, max_cycles=10**9, pair_accel_limit=limit)
-    core = PairFlockCore(cfg, num_envs=B)
+    core = PairFlockCore(cfg, num_swarms=B)
     res = core.reset(seed=0)
     smc = SlidingModeController(cfg)
     ia = core.agent_uavs
@@ -96,7 +96,7 @@ def assumptions(N: int, seeds: int = 8, radius: float = 20.0) -> None:
     for the UAVs within ``radius`` of a paired UAV (20 m: the filter's sensing radius when
     docs/safety.md quoted them; the default is 100 m now)."""
     cfg = make_config("paper", n_uavs=N)
-    core = PairFlockCore(cfg, num_envs=seeds)
+    core = PairFlockCore(cfg, num_swarms=seeds)
     res = core.reset(seed=list(range(seeds)))
     smc = SlidingModeController(cfg)
     ia = core.agent_uavs
@@ -137,7 +137,7 @@ STAGES = (
     ("2b. safety filter", "safety", "apply"),
     ("3. desired acceleration", "", "_desired_acceleration"),
     ("4. vehicle", "vehicle", "advance"),
-    ("5a. flocking + pair sweep", "", "_sweep"),
+    ("5a. flocking + pair pass", "", "_neighbor_pass"),
     ("5b. observation", "", "_observation"),
 )
 
@@ -181,7 +181,7 @@ def in_step(
         safety_filter="cbf",
         **({} if radius is None else {"safety_sensing_radius": radius}),
     )
-    core = PairFlockCore(cfg, num_envs=B)
+    core = PairFlockCore(cfg, num_swarms=B)
     if scan:  # the filter scans all N UAVs per agent although the core has a grid
         apply = core.safety.apply
         core.safety.apply = lambda q, p, f, u, grid=None: apply(q, p, f, u)

@@ -11,14 +11,14 @@ One control step (:meth:`PairFlockCore.step`), stage by stage:
 3. a_des = flocking command of the current state (eqs. 11-19) + u on the paired UAVs
    (+ the random disturbance, when configured);
 4. the vehicle model integrates ``substeps`` physics steps with a_des held;
-5. the clock and the leader advance; one sweep computes the flocking command of the new
+5. the clock and the leader advance; one pass computes the flocking command of the new
    state together with separations, collisions and connectivity; observations
    (:mod:`~pairflock_env.task.observations`, through the partner delay and sensor noise),
    rewards and termination (:mod:`~pairflock_env.task.rewards`) and infos
    (:mod:`~pairflock_env.task.infos`) follow.
 
 The flocking command of stage 3 was computed at the end of the previous step (or at reset),
-so each step does exactly one sweep: over all pairs (O(N^2)) or, with ``neighbor_search``
+so each step does exactly one pass: over all pairs (O(N^2)) or, with ``neighbor_search``
 resolving to the grid, over a :class:`~pairflock_env.swarm.grid.NeighborGrid` rebuilt from
 the positions first (O(N)); both give the same results. Initial states come from
 :mod:`~pairflock_env.swarm.placement`. Views (PettingZoo, Gymnasium, SB3) only validate, reshape,
@@ -38,7 +38,7 @@ from pairflock_env.safety.stage import SafetyStage
 from pairflock_env.seeding import swarm_generators
 from pairflock_env.swarm.grid import NeighborGrid
 from pairflock_env.swarm.leader import make_leader
-from pairflock_env.swarm.passes import NeighborSweep
+from pairflock_env.swarm.passes import NeighborPass
 from pairflock_env.swarm.placement import check_reset_options, initial_state, pinning_mask
 from pairflock_env.task.actions import check_pair_actions, decode_pair_actions, real_array
 from pairflock_env.task.delay import PartnerDelayBuffer
@@ -89,7 +89,7 @@ class PairFlockCore:
     Args:
         config: a :class:`PairFlockConfig`, or ``None`` to build one from ``preset`` and
             ``overrides``.
-        num_envs: number of swarms B simulated side by side.
+        num_swarms: number of swarms B simulated side by side.
         seed: seed of the per-swarm generators (see :meth:`reset`).
 
     Attributes (read-only views of the state; use :meth:`reset` / :meth:`step` to change it):
@@ -100,7 +100,7 @@ class PairFlockCore:
     def __init__(
         self,
         config: PairFlockConfig | None = None,
-        num_envs: int = 1,
+        num_swarms: int = 1,
         seed: SeedLike = None,
         *,
         preset: str | None = "paper",
@@ -115,14 +115,14 @@ class PairFlockCore:
             )
         elif overrides:
             config = config.replace(**overrides)
-        check_count("num_envs", num_envs)
+        check_count("num_swarms", num_swarms)
         self.config = cfg = config
-        self.num_envs = B = int(num_envs)
+        self.num_swarms = B = int(num_swarms)
         N, D = cfg.n_uavs, cfg.dim
         self.layout = ObsLayout(D, cfg.obs_neighbors)
 
-        # the sweeps of the current state, and the agents' indexing (one definition, there)
-        self._neighbors = sw = NeighborSweep(cfg, B)
+        # the passes of the current state, and the agents' indexing (one definition, there)
+        self._neighbors = sw = NeighborPass(cfg, B)
         self.agent_uavs, self.partner_uavs = sw.agent_uavs, sw.partner_uavs  # (M,) A0, B0, ...
         self.agent_pair, self.partner_of = sw.agent_pair, sw.partner_of  # (M,), (N,)
         self._agent_dm = sw.agent_dm  # (M,)
@@ -185,7 +185,7 @@ class PairFlockCore:
 
     @property
     def neighbor_grid(self) -> NeighborGrid | None:
-        """The neighbour grid of the current state, built by the last sweep (``None`` with
+        """The neighbour grid of the current state, built by the last pass (``None`` with
         all-pairs search): a stage that needs the neighbours of the current state (a safety
         filter between decoding and the desired acceleration) queries it."""
         return self._neighbors.grid
@@ -212,7 +212,7 @@ class PairFlockCore:
         ``options``: ``positions`` / ``velocities`` arrays (N, dim) or (B, N, dim) override
         the random initial state.
         """
-        return self.reset_rows(np.arange(self.num_envs), seed=seed, options=options)
+        return self.reset_rows(np.arange(self.num_swarms), seed=seed, options=options)
 
     def reset_rows(
         self,
@@ -227,7 +227,7 @@ class PairFlockCore:
         Everything is validated before any state changes.
         """
         rows = np.asarray(rows, dtype=np.int64).reshape(-1)
-        B, D, cfg = self.num_envs, self.config.dim, self.config
+        B, D, cfg = self.num_swarms, self.config.dim, self.config
         if rows.size and (rows.min() < 0 or rows.max() >= B):
             raise ValueError(f"rows={rows.tolist()} is invalid: must be in [0, {B - 1}]")
         new_rngs = None if seed is None else self._make_rngs(seed, len(rows))
@@ -267,7 +267,7 @@ class PairFlockCore:
         :mod:`pairflock_env.task.actions`.
         """
         return check_pair_actions(
-            actions, self.num_envs, self.n_agents, self.config.dim, self.agent_uavs
+            actions, self.num_swarms, self.n_agents, self.config.dim, self.agent_uavs
         )
 
     def decode_actions(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -288,13 +288,13 @@ class PairFlockCore:
 
         Decoding (stage 2) and the desired acceleration (stage 3) are separate on purpose:
         the safety filter (stage 2b, :attr:`safety`) adjusts the decoded pair command u
-        from what each UAV senses, using the sweep of the current state that the previous
+        from what each UAV senses, using the pass over the current state that the previous
         step (or the reset) made.
         """
         self._require_reset()
         a = self.check_actions(actions)  # 1. validate (raises before any state change)
         u, clipped = self.decode_actions(a)  # 2. decode: the pair command u, m/s^2
-        grid = self.neighbor_grid  # of this state, from the last sweep (None: all pairs)
+        grid = self.neighbor_grid  # of this state, from the last pass (None: all pairs)
         u = self.safety.apply(self.q, self.p, self._flock_out["acc"], u, grid)  # 2b. safety filter
         with np.errstate(**_CHECKED_FP):
             a_des = self._desired_acceleration(u)  # 3. flocking + pair term (+ disturbance)
@@ -325,10 +325,11 @@ class PairFlockCore:
     def _refresh(
         self, u: np.ndarray, clipped: np.ndarray, reset_rows: np.ndarray | None = None
     ) -> StepResult:
-        """Sweep the new state and build the step's observation, reward, flags and infos."""
+        """Run the neighbour pass over the new state and build the step's observation, reward,
+        flags and infos."""
         cfg = self.config
         lq, lp = self._leader.state(self.t)
-        fl, pair = self._sweep(lq, lp)
+        fl, pair = self._neighbor_pass(lq, lp)
         obs = self._observation(pair, lq, lp, reset_rows)
         finite = np.isfinite(obs).all(axis=(1, 2))
         if self._noise is not None and not finite.all():
@@ -353,9 +354,9 @@ class PairFlockCore:
         info.update(vinfo)
         return StepResult(obs, reward, terminated, truncated, info)
 
-    def _sweep(self, lq: np.ndarray, lp: np.ndarray) -> tuple[dict, dict[str, np.ndarray]]:
-        """The flocking sweep of the current state and the agents' pair quantities (B, M)
-        (:class:`~pairflock_env.swarm.passes.NeighborSweep`)."""
+    def _neighbor_pass(self, lq: np.ndarray, lp: np.ndarray) -> tuple[dict, dict[str, np.ndarray]]:
+        """The flocking pass of the current state and the agents' pair quantities (B, M)
+        (:class:`~pairflock_env.swarm.passes.NeighborPass`)."""
         fl, pair = self._neighbors.run(self.q, self.p, lq, lp, self._pinned)
         self._flock_out = fl
         return fl, pair

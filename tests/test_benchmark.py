@@ -228,7 +228,7 @@ def test_three_d_scenario_draws_trajectories(tmp_path):
         (["--set", "dim=4"], ["dim=4", "[2, 3]"]),
         (["--delay", "-1"], ["partner_delay=-1"]),
         (["--n-uavs", "8", "--set", "n_uavs=9"], ["n_uavs", "--n-uavs"]),
-        (["--scenario", "a:n_uavs=9", "--n-uavs", "8", "9"], ["n_uavs", "sweep axis"]),
+        (["--scenario", "a:n_uavs=9", "--n-uavs", "8", "9"], ["n_uavs", "grid axis"]),
         (["--video", "x.avi"], [".mp4", ".gif"]),
         (["--preset", "nope"], ["nope", "paper"]),
         (["--seeds", "0"], ["--seeds 0"]),

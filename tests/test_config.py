@@ -227,7 +227,7 @@ def test_unknown_keywords_are_type_errors_everywhere():
 
     from pairflock_env import ENV_ID, PairFlockCore
     from pairflock_env.config import UnknownFieldError
-    from pairflock_env.interfaces import PairFrameParams, make_interface
+    from pairflock_env.interfaces import PairInterfaceParams, make_interface
 
     cfg = make_config("paper", n_uavs=8)
     calls = [
@@ -250,7 +250,7 @@ def test_unknown_keywords_are_type_errors_everywhere():
     with pytest.raises(TypeError, match="Did you mean 'w_error'"):
         make_interface("pair", cfg, w_eror=1.0)
     with pytest.raises(TypeError, match="Did you mean 'w_error'"):
-        PairFrameParams(w_eror=1.0)
+        PairInterfaceParams(w_eror=1.0)
     with pytest.raises(TypeError, match="world-frame parameter 'w_error'"):
         make_interface("world", cfg, w_error=1.0)
 
@@ -328,7 +328,7 @@ def test_placement_that_cannot_succeed_is_refused_at_construction():
 
     cfg = make_config("paper", n_uavs=60, swarm_half_width=18.0, min_init_spacing=3.0)
     assert 0.2 < start_density(cfg) <= 0.3
-    core = PairFlockCore(cfg, num_envs=4)
+    core = PairFlockCore(cfg, num_swarms=4)
     core.reset(seed=[0, 1, 2, 3])
 
 
@@ -346,7 +346,7 @@ def test_safe_distance_is_a_deprecated_alias():
     import pickle
     import warnings
 
-    from pairflock_env.interfaces import PairFrameParams, interface_from_dict, make_interface
+    from pairflock_env.interfaces import PairInterfaceParams, interface_from_dict, make_interface
 
     with pytest.warns(DeprecationWarning, match="safe_distance.*reward_separation_distance"):
         cfg = make_config("paper", safe_distance=1.5)
@@ -370,7 +370,7 @@ def test_safe_distance_is_a_deprecated_alias():
         itf = make_interface("pair", cfg, safe_distance=3.0)
     assert itf.params.separation_distance == 3.0 and "safe_distance" not in itf.to_dict()
     with pytest.warns(DeprecationWarning):
-        assert PairFrameParams(safe_distance=3.0).separation_distance == 3.0
+        assert PairInterfaceParams(safe_distance=3.0).separation_distance == 3.0
     stored = {**itf.to_dict()}
     stored["safe_distance"] = stored.pop("separation_distance")
     with warnings.catch_warnings():

@@ -32,7 +32,7 @@ from pairflock_env.config.sections.flocking import Pinning
 from pairflock_env.config.sections.leader import Turns
 from pairflock_env.config.sections.pairs import Pairs, PerPair
 from pairflock_env.interfaces import make_interface
-from pairflock_env.interfaces.pair_frame_params import FRAME_SCHEMA
+from pairflock_env.interfaces.pair_params import PAIR_INTERFACE_SCHEMA
 
 FIELD_NAMES = tuple(SCHEMA.fields)
 #: small, fast tasks the fuzzed fields are applied to (one per vehicle model)
@@ -204,7 +204,7 @@ def _assert_finite(res, what: str, n_uavs: int) -> None:
 
 def run_briefly(cfg, steps: int = 3) -> None:
     """Build a 1-swarm core; unless it is large, reset it and step it with random actions."""
-    core = PairFlockCore(cfg, num_envs=1, seed=0)
+    core = PairFlockCore(cfg, num_swarms=1, seed=0)
     if any(getattr(cfg, name) > most for name, most in RUN_LIMITS.items()):
         return
     res = core.reset(seed=0)
@@ -283,18 +283,18 @@ def test_field_combinations_are_rejected_clearly_or_run(base, route, overrides):
     check(base, overrides, route)
 
 
-@pytest.mark.parametrize("name", tuple(FRAME_SCHEMA.fields))
+@pytest.mark.parametrize("name", tuple(PAIR_INTERFACE_SCHEMA.fields))
 @settings(max_examples=8, **_SETTINGS)
 @given(data=st.data())
 def test_each_frame_parameter_is_rejected_clearly_or_works(name, data):
-    value = data.draw(field_values(FRAME_SCHEMA, name), label=name)
+    value = data.draw(field_values(PAIR_INTERFACE_SCHEMA, name), label=name)
     cfg = make_config("paper", n_uavs=8, max_cycles=4, obs_neighbors=4, pair_accel_limit=50.0)
     try:
         itf = make_interface("pair", cfg, **{name: value})
     except (TypeError, ValueError) as e:
         assert name in str(e) and "must" in str(e), str(e)
         return
-    core = PairFlockCore(cfg, num_envs=1, seed=0)
+    core = PairFlockCore(cfg, num_swarms=1, seed=0)
     res = core.reset(seed=0)
     a = np.random.default_rng(0).uniform(-1, 1, (1, core.n_agents, cfg.dim))
     for _ in range(2):

@@ -26,13 +26,13 @@ def _actions(rng, T, B, M, D):
 def test_batched_equals_sequential(small_config):
     seeds = [11, 22, 33, 44]
     B, T = len(seeds), 40
-    batched = PairFlockCore(small_config, num_envs=B)
+    batched = PairFlockCore(small_config, num_swarms=B)
     batched.reset(seed=seeds)
     M, D = batched.n_agents, small_config.dim
     acts = _actions(np.random.default_rng(0), T, B, M, D)
     ob, rb, ib = _run(batched, acts)
     for b, s in enumerate(seeds):
-        single = PairFlockCore(small_config, num_envs=1)
+        single = PairFlockCore(small_config, num_swarms=1)
         single.reset(seed=[s])
         os_, rs, is_ = _run(single, acts[:, b : b + 1])
         assert np.array_equal(ob[:, b], os_[:, 0])
@@ -45,7 +45,7 @@ def test_batched_equals_sequential(small_config):
 
 
 def test_int_seed_spawns_one_child_per_swarm(small_config):
-    batched = PairFlockCore(small_config, num_envs=3)
+    batched = PairFlockCore(small_config, num_swarms=3)
     batched.reset(seed=7)
     children = np.random.SeedSequence(7).spawn(3)
     for b in range(3):
@@ -78,7 +78,7 @@ def test_reset_without_seed_continues_the_stream(small_config):
 
 
 def test_reset_rows_touches_only_those_rows(small_config):
-    core = PairFlockCore(small_config, num_envs=3)
+    core = PairFlockCore(small_config, num_swarms=3)
     core.reset(seed=[1, 2, 3])
     for _ in range(5):
         core.step(np.zeros((3, core.n_agents, small_config.dim)))
@@ -93,7 +93,7 @@ def test_reset_rows_touches_only_those_rows(small_config):
 
 def test_initial_state_respects_placement(small_config):
     cfg = small_config
-    core = PairFlockCore(cfg, num_envs=5)
+    core = PairFlockCore(cfg, num_swarms=5)
     core.reset(seed=0)
     a, b = cfg.pairs[0]
     # the start box: centre and half-widths may differ per axis (paper-quadrotor: z = 20 m)
@@ -177,7 +177,7 @@ def test_out_of_range_actions_are_clipped_and_reported(small_config):
 
 
 def test_divergence_ends_the_episode_without_nan_observations(small_config):
-    core = PairFlockCore(small_config, num_envs=2)
+    core = PairFlockCore(small_config, num_swarms=2)
     res = core.reset(seed=[0, 1])
     M, D = core.n_agents, small_config.dim
     res = core.step(np.zeros((2, M, D)))
@@ -235,8 +235,8 @@ def test_partner_delay_shows_the_partners_old_state():
 def test_observation_noise_has_the_configured_spread():
     cfg = make_config("paper", n_uavs=6, obs_noise_position=0.2, obs_noise_velocity=0.05)
     noisy, clean = (
-        PairFlockCore(cfg, num_envs=64),
-        PairFlockCore(cfg.replace(obs_noise_position=0.0, obs_noise_velocity=0.0), num_envs=64),
+        PairFlockCore(cfg, num_swarms=64),
+        PairFlockCore(cfg.replace(obs_noise_position=0.0, obs_noise_velocity=0.0), num_swarms=64),
     )
     rn, rc = noisy.reset(seed=3), clean.reset(seed=3)
     L = noisy.layout

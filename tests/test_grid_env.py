@@ -18,7 +18,7 @@ TRAJECTORY_TOL = 1e-9
 def run(search: str, steps: int, seed: int, **overrides):
     """Positions, velocities, rewards and infos of every step under random actions."""
     cfg = make_config("paper", neighbor_search=search, max_cycles=10 * steps, **overrides)
-    core = PairFlockCore(cfg, num_envs=2, seed=seed)
+    core = PairFlockCore(cfg, num_swarms=2, seed=seed)
     first = core.reset()
     rng = np.random.default_rng(seed)
     out = [(core.q.copy(), core.p.copy(), first)]

@@ -177,7 +177,7 @@ def test_feedforward_makes_the_pair_a_double_integrator():
     """With the pair frame's decode, z'' = -accel_scale R^T (a_A + a_B) whatever the flocking
     terms are (eq. 23 with the observed flocking difference cancelled)."""
     cfg = make_config("paper", n_uavs=20, pair_accel_limit=1000.0, integrator="exact")
-    core = PairFlockCore(cfg, num_envs=1)
+    core = PairFlockCore(cfg, num_swarms=1)
     res = core.reset(seed=[3])
     # put the pair inside the swarm so that the flocking terms on it are large
     q, p = core.q[0].copy(), core.p[0].copy()
@@ -215,7 +215,7 @@ def test_a_stored_interface_keeps_its_acceleration_limit_in_a_wider_env():
     trained = make_interface("pair", make_config("paper", n_uavs=20, pair_accel_limit=50.0))
     wide = make_config("paper", n_uavs=20)
     itf = interface_from_dict(trained.to_dict(), wide)
-    core = PairFlockCore(wide, num_envs=1)
+    core = PairFlockCore(wide, num_swarms=1)
     res = core.reset(seed=[0])
     u = itf.decode(res.obs[0], np.ones((2, 2))) * wide.pair_accel_limit
     np.testing.assert_allclose(np.linalg.norm(u, axis=-1), 50.0, rtol=1e-12)
@@ -224,7 +224,7 @@ def test_a_stored_interface_keeps_its_acceleration_limit_in_a_wider_env():
 def test_interface_encoding_is_bounded_finite_and_symmetric():
     cfg = make_config("paper", n_uavs=30, obs_neighbors=12, pair_accel_limit=50.0)
     itf = make_interface("pair", cfg)
-    core = PairFlockCore(cfg, num_envs=4)
+    core = PairFlockCore(cfg, num_swarms=4)
     res = core.reset(seed=[0, 1, 2, 3])
     for _ in range(30):
         res = core.step(np.random.default_rng(0).uniform(-1, 1, (4, 2, 2)))
@@ -244,7 +244,7 @@ def test_interface_encoding_is_bounded_finite_and_symmetric():
     d = itf.to_dict()
     again = interface_from_dict(d, cfg)
     np.testing.assert_array_equal(again.encode(res.obs), enc)
-    with pytest.raises(ValueError, match="unknown pair-frame parameter"):
+    with pytest.raises(ValueError, match="unknown pair-interface parameter"):
         make_interface("pair", cfg, w_eror=1.0)
     with pytest.raises(ValueError, match="threat_neighbors"):
         make_interface("pair", make_config("paper", obs_neighbors=3), threat_neighbors=6)

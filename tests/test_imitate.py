@@ -13,7 +13,7 @@ from pairflock_env.interfaces import make_interface
 @pytest.mark.parametrize("dim", [2, 3])
 def test_action_for_inverts_decode(dim):
     cfg = make_config("paper", n_uavs=20, dim=dim, pair_accel_limit=50.0, obs_neighbors=12)
-    core = PairFlockCore(cfg, num_envs=3)
+    core = PairFlockCore(cfg, num_swarms=3)
     obs = core.reset(seed=[0, 1, 2]).obs
     iface = make_interface("pair", cfg)
     rng = np.random.default_rng(0)

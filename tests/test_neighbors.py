@@ -1,4 +1,4 @@
-"""The neighbour grid gives exactly what the all-pairs sweeps give (bit for bit), and grid
+"""The neighbour grid gives exactly what the all-pairs passes give (bit for bit), and grid
 placement draws exactly the positions of the O(N^2) rejection sampler it replaces."""
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ def positions(layout: str, rng, B: int, N: int, D: int, h: float) -> np.ndarray:
     raise AssertionError(layout)
 
 
-def compare_sweeps(cfg, q, p, K, max_cells=None):
+def compare_passes(cfg, q, p, K, max_cells=None):
     B, N, D = q.shape
     rng = np.random.default_rng(N)
     lq, lp = rng.normal(size=(B, D)), rng.normal(size=(B, D))
@@ -82,7 +82,7 @@ LAYOUTS = ["spread", "clustered", "borders", "coincident", "runaway", "nonfinite
 
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("layout", LAYOUTS)
-def test_grid_sweeps_equal_all_pairs(layout, dim):
+def test_grid_passes_equal_all_pairs(layout, dim):
     rng = np.random.default_rng(LAYOUTS.index(layout) + 10 * dim)
     for N, B, K, coll in ((500, 2, 6, 0.5), (60, 3, 10, 12.0), (7, 2, 9, 0.5)):
         cfg = make_config(
@@ -91,14 +91,14 @@ def test_grid_sweeps_equal_all_pairs(layout, dim):
         h = NeighborGrid(1, 1, dim, max(cfg.radius, coll)).arrays.h
         q = positions(layout, rng, B, N, dim, h)
         p = rng.normal(size=(B, N, dim))
-        grid = compare_sweeps(cfg, q, p, K)
+        grid = compare_passes(cfg, q, p, K)
         assert grid.ok.tolist() == np.isfinite(q).all(axis=(1, 2)).tolist()
         if layout == "runaway":  # the far UAV folds the grid instead of growing it
             assert grid.arrays.wrap.any(axis=1).all()
         if layout in ("borders", "coincident") and N == 500:  # padded, unfolded cells
             assert (grid.arrays.n_ring == 3**dim).all() and not grid.arrays.wrap.any()
         # few buckets: far cells share buckets, and every answer stays the same
-        compare_sweeps(cfg, q, p, K, max_cells=7)
+        compare_passes(cfg, q, p, K, max_cells=7)
 
 
 def test_grid_flocking_trajectory_equals_all_pairs():

@@ -1,4 +1,4 @@
-"""Physics invariants of the particle model and the flocking sweep, against closed forms and
+"""Physics invariants of the particle model and the flocking pass, against closed forms and
 an independent brute-force evaluation of eqs. 2 and 11-19 written here in plain numpy."""
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ def _random_swarm(rng, B, N, D, box=12.0):
 
 
 @pytest.mark.parametrize("dim", [2, 3])
-def test_flocking_sweep_matches_brute_force(dim):
+def test_flocking_pass_matches_brute_force(dim):
     rng = np.random.default_rng(1)
     cfg = make_config("paper", n_uavs=15, dim=dim, pinning=(0, 3, 7))
     q, p, lq, lp = _random_swarm(rng, 3, 15, dim)

@@ -239,7 +239,7 @@ def test_hitting_the_ground_ends_the_episode_in_every_view():
 
 
 def test_core_reports_the_vehicle_diagnostics_per_agent_and_per_swarm():
-    core = PairFlockCore(make_config("paper-quadrotor"), num_envs=2, seed=0)
+    core = PairFlockCore(make_config("paper-quadrotor"), num_swarms=2, seed=0)
     res = core.reset()
     M = core.n_agents
     res = core.step(np.zeros((2, M, 3)))

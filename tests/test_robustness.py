@@ -15,7 +15,7 @@ STEPS = 60
 
 
 def _zero(core: PairFlockCore) -> np.ndarray:
-    return np.zeros((core.num_envs, core.n_agents, core.config.dim))
+    return np.zeros((core.num_swarms, core.n_agents, core.config.dim))
 
 
 def _true_partner(core: PairFlockCore) -> tuple[np.ndarray, np.ndarray]:
@@ -29,7 +29,7 @@ def _field(core: PairFlockCore, obs: np.ndarray, name: str) -> np.ndarray:
 
 def _residuals(cfg, **robust) -> tuple[np.ndarray, np.ndarray]:
     """Observed minus true partner offset and velocity over a zero-action episode."""
-    core = PairFlockCore(cfg.replace(**robust), num_envs=4)
+    core = PairFlockCore(cfg.replace(**robust), num_swarms=4)
     res = core.reset(seed=[11, 12, 13, 14])
     dy, dv = [], []
     for _ in range(STEPS):
@@ -69,7 +69,7 @@ def test_observation_noise_has_the_stated_std_on_its_field_only(small_config, fi
 
 
 def _trajectory(cfg, steps: int = STEPS) -> np.ndarray:
-    core = PairFlockCore(cfg, num_envs=2)
+    core = PairFlockCore(cfg, num_swarms=2)
     core.reset(seed=[5, 6])
     qs = [core.q.copy()]
     for _ in range(steps):
@@ -89,7 +89,7 @@ def test_noise_and_delay_change_what_agents_see_not_the_physics(small_config, ro
 
 def test_partner_delay_shows_the_partner_state_of_d_steps_ago(small_config):
     d = 3
-    core = PairFlockCore(small_config.replace(partner_delay=d), num_envs=2)
+    core = PairFlockCore(small_config.replace(partner_delay=d), num_swarms=2)
     res = core.reset(seed=[1, 2])
     ia, ip = core.agent_uavs, core.partner_uavs
     hq, hp, ha = [], [], []
@@ -122,7 +122,7 @@ def test_disturbance_is_an_extra_acceleration_of_the_stated_std(small_config, dy
         pytest.skip("the velocity increment equals the command only for the particle model")
     sigma = 2.5
     cfg = small_config.replace(disturbance_std=sigma)
-    core = PairFlockCore(cfg, num_envs=3)
+    core = PairFlockCore(cfg, num_swarms=3)
     core.reset(seed=[7, 8, 9])
     w = []
     for _ in range(STEPS):
@@ -143,7 +143,7 @@ def test_random_options_use_each_swarms_own_generator(small_config):
     cfg = small_config.replace(
         obs_noise_position=0.5, obs_noise_velocity=0.5, partner_delay=2, disturbance_std=1.0
     )
-    big, one = PairFlockCore(cfg, num_envs=3), PairFlockCore(cfg, num_envs=1)
+    big, one = PairFlockCore(cfg, num_swarms=3), PairFlockCore(cfg, num_swarms=1)
     rb, r1 = big.reset(seed=[4, 9, 2]), one.reset(seed=[9])
     rng = np.random.default_rng(0)
     for _ in range(STEPS):
@@ -185,8 +185,8 @@ def _all_finite(info) -> bool:
 def test_a_diverged_swarm_keeps_its_last_finite_infos(small_config, blowup):
     """A swarm that diverges (NaN, or a runaway beyond float32) repeats the observation and
     the state infos of its last finite step; the other swarm is unaffected."""
-    core = PairFlockCore(small_config, num_envs=2)
-    ref = PairFlockCore(small_config, num_envs=2)
+    core = PairFlockCore(small_config, num_swarms=2)
+    ref = PairFlockCore(small_config, num_swarms=2)
     core.reset(seed=[0, 1])
     ref.reset(seed=[0, 1])
     zero = _zero(core)
@@ -251,7 +251,7 @@ def test_huge_observation_noise_never_flags_divergence(small_config, field):
         assert field in str(err)
         return
     np.testing.assert_array_equal(_trajectory(cfg, 10), _trajectory(small_config, 10))
-    core = PairFlockCore(cfg, num_envs=2)
+    core = PairFlockCore(cfg, num_swarms=2)
     res = core.reset(seed=[1, 2])
     for _ in range(10):
         assert np.isfinite(res.obs).all() and not res.info["diverged"].any()
@@ -267,7 +267,7 @@ def test_extreme_configs_give_finite_results_or_a_clear_error(small_config, over
     except ValueError as err:
         assert next(iter(overrides)) in str(err)
         return
-    core = PairFlockCore(cfg, num_envs=2)
+    core = PairFlockCore(cfg, num_swarms=2)
     res = core.reset(seed=[1, 2])
     for _ in range(3):
         assert np.isfinite(res.obs).all() and np.isfinite(res.reward).all()

@@ -28,7 +28,7 @@ def _run(core, policy, steps, seeds):
     """Steps of ``policy``; yields each step's result (the reset's first)."""
     res = core.reset(seed=seeds)
     yield res
-    B, M = core.num_envs, core.n_agents
+    B, M = core.num_swarms, core.n_agents
     for _ in range(steps):
         a, _ = policy.predict(res.obs.reshape(B * M, -1), deterministic=True)
         res = core.step(a.reshape(B, M, -1))
@@ -151,7 +151,7 @@ def test_cross_field_rules_are_checked_at_construction():
 
 # --------------------------------------------------------------------------- core
 def test_filter_off_passes_the_command_through_and_reports_zeros():
-    core = PairFlockCore(preset="paper", n_uavs=8, num_envs=2)
+    core = PairFlockCore(preset="paper", n_uavs=8, num_swarms=2)
     res = core.reset(seed=0)
     u = np.ones((2, core.n_agents, 2))
     assert core.safety.apply(core.q, core.p, core.flock_accel, u) is u
@@ -167,7 +167,7 @@ def test_filter_changes_nothing_while_no_uav_is_within_the_sensing_radius():
     cfg = make_config("paper", n_uavs=20)
     runs = []
     for c in (cfg, cfg.replace(**CBF)):
-        core = PairFlockCore(c, num_envs=2)
+        core = PairFlockCore(c, num_swarms=2)
         pol = make_pair_policy("smc", c)
         qs = []
         for res in _run(core, pol, 300, [1, 2]):
@@ -188,7 +188,7 @@ def test_smc_with_the_filter_keeps_the_safety_distance_at_n20_corners():
     over a whole episode, unless the filter reports an infeasible step."""
     cfg = make_config("paper", n_uavs=20, **CBF)
     seeds = [30000, 30001, 30002]
-    core = PairFlockCore(cfg, num_envs=len(seeds))
+    core = PairFlockCore(cfg, num_swarms=len(seeds))
     closest = np.full(len(seeds), np.inf)
     infeasible = np.zeros(len(seeds), int)
     active = 0
@@ -205,7 +205,7 @@ def test_smc_with_the_filter_keeps_the_safety_distance_at_n20_corners():
 
 def test_filtered_command_is_the_applied_one():
     cfg = make_config("paper", n_uavs=20, pair_accel_limit=50.0, **CBF)
-    core = PairFlockCore(cfg, num_envs=2)
+    core = PairFlockCore(cfg, num_swarms=2)
     pol = make_pair_policy("smc", cfg)
     changed = False
     for k, res in enumerate(_run(core, pol, 300, [3, 4])):
@@ -224,7 +224,7 @@ def test_filtered_command_is_the_applied_one():
 @pytest.mark.parametrize("tau", [0.0, 0.1, None])
 def test_quadrotor_gets_the_filter_too(tau):
     cfg = make_config("paper-quadrotor", **CBF, safety_reaction_time=tau)
-    core = PairFlockCore(cfg, num_envs=1)
+    core = PairFlockCore(cfg, num_swarms=1)
     assert core.safety.filter.params.reaction_time == (0.1 if tau is None else tau)
     pol = make_pair_policy("smc", cfg)
     for res in _run(core, pol, 20, [0]):

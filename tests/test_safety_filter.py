@@ -843,7 +843,7 @@ def test_partner_is_constrained_beyond_the_sensing_radius():
 def test_core_filter_senses_each_agents_partner():
     from pairflock_env import PairFlockCore
 
-    core = PairFlockCore(make_config("paper", n_uavs=20, safety_filter="cbf"), num_envs=1)
+    core = PairFlockCore(make_config("paper", n_uavs=20, safety_filter="cbf"), num_swarms=1)
     assert np.array_equal(core.safety.filter.partners, core.partner_uavs)
 
 

@@ -121,7 +121,7 @@ def test_core_with_the_grid_flies_the_all_pairs_trajectories(policy):
         safety_sensing_radius=60.0,
     )
     cores = {
-        s: PairFlockCore(make_config("paper", neighbor_search=s, **kw), num_envs=3)
+        s: PairFlockCore(make_config("paper", neighbor_search=s, **kw), num_swarms=3)
         for s in ("all_pairs", "grid")
     }
     assert cores["grid"].neighbor_grid is not None and cores["all_pairs"].neighbor_grid is None

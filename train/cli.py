@@ -126,7 +126,7 @@ def _task_options(p: argparse.ArgumentParser) -> None:
         action="append",
         default=[],
         metavar="NAME=VALUE",
-        help="PairFrameParams field, repeatable (e.g. --interface-param w_separation=2; "
+        help="PairInterfaceParams field, repeatable (e.g. --interface-param w_separation=2; "
         "--frame-param is the old name)",
     )
 

@@ -11,7 +11,7 @@ Bagnell, 2011):
 
 1. the teacher flies the training envs for ``--decisions`` policy decisions per row, each of
    its world-frame commands turned into the network's pair-frame action by the interface's
-   inverse (:meth:`~pairflock_env.interfaces.PairFrameInterface.action_for`) and held for the
+   inverse (:meth:`~pairflock_env.interfaces.PairInterface.action_for`) and held for the
    interface's decision period, exactly like a network action;
 2. the network is fitted to every (encoded observation, teacher action) pair collected so far
    (mean squared error of the Gaussian's mean, Adam, ``--epochs`` passes, the learning rate

@@ -177,7 +177,7 @@ class TaskMixVecEnv(VecEnv):
         for k, (env, part) in enumerate(zip(self.envs, parts, strict=True)):
             if part.get("config") != env.config.to_dict():
                 raise ValueError(f"state of task {k} ({self.task_names[k]}) has another config")
-            if part["core"].num_envs != env.num_swarms:
+            if part["core"].num_swarms != env.num_swarms:
                 raise ValueError(f"state of task {k} ({self.task_names[k]}) has another size")
         for env, part in zip(self.envs, parts, strict=True):
             env.set_state(part)

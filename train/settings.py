@@ -16,7 +16,7 @@ YAML layout (every key optional; see ``train/configs/*.yaml``, which ship with t
       pair_accel_limit: 50.0
     eval_env: {horizon: 50.0}  # overrides applied on top of env for evaluation
     interface: pair            # pair | world (the learning interface; old key: frame)
-    interface_params: {}       # PairFrameParams fields (old key: frame_params)
+    interface_params: {}       # PairInterfaceParams fields (old key: frame_params)
     num_swarms: 32
     tasks:                     # optional: train on a mix (train/tasks.py, docs/learning.md)
       - {n_uavs: 20, init: corners, num_swarms: 8}

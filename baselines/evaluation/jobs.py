@@ -1,4 +1,4 @@
-"""Jobs of a benchmark sweep and the backends that run them (local processes or Ray).
+"""Jobs of a benchmark grid and the backends that run them (local processes or Ray).
 
 A job is one (scenario, policy) over a block of seeds, run as one batched core through
 :func:`baselines.evaluation.rollout.rollout`. A swarm's result depends only on its config,

@@ -159,7 +159,7 @@ def rollout(
             quadrotor attitude). It must not change the core.
     """
     seeds = [int(s) for s in seeds]
-    core = PairFlockCore(config, num_envs=len(seeds))
+    core = PairFlockCore(config, num_swarms=len(seeds))
     B, M, D = len(seeds), core.n_agents, config.dim
     T = config.episode_steps if steps is None else int(steps)
     res = core.reset(seed=seeds)

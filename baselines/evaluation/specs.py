@@ -229,7 +229,7 @@ def parse_policy(spec: str) -> PolicySpec:
 
 @dataclasses.dataclass(frozen=True)
 class Scenario:
-    """One task of the sweep: a label and the config overrides on top of the preset."""
+    """One task of the grid: a label and the config overrides on top of the preset."""
 
     label: str
     overrides: tuple[tuple[str, Any], ...]
@@ -298,7 +298,7 @@ def expand_scenarios(
         clash = sorted(set(ov) & {k for k, _ in axes})
         if clash:
             raise ValueError(
-                f"scenario {label or scenario_label(ov)!r} sets {clash}, which is also a sweep "
+                f"scenario {label or scenario_label(ov)!r} sets {clash}, which is also a grid "
                 "axis (--set or a shortcut option); set it once"
             )
         for combo in itertools.product(*(vals for _, vals in axes)):

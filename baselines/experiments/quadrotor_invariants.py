@@ -65,7 +65,7 @@ def orthonormality_over_scenario(seed: int = 0, policy: str = "smc") -> dict[str
     from pairflock_env.math3d import orthonormality_error
 
     cfg = make_config(PRESET)
-    core = PairFlockCore(cfg, num_envs=1, seed=seed)
+    core = PairFlockCore(cfg, num_swarms=1, seed=seed)
     res = core.reset()
     pol = make_pair_policy(policy, cfg)
     model = core.vehicle

@@ -7,7 +7,7 @@ Each folder is an ``--out`` of ``python -m baselines.benchmark`` whose runs carr
 columns (e.g. ``--suite safety``); the rows of all folders on one side are pooled. The
 filter-off runs (``safety_filter=none``) of the first folders pair with the filter-on runs
 (``safety_filter=cbf``) of ``--against`` (default: the same folders) on every setting both
-share (controller, N, start, ...) and on (seed, pair); a setting only ``--against`` sweeps
+share (controller, N, start, ...) and on (seed, pair); a setting only ``--against`` varies
 (e.g. ``--set safety_other_accel=40,100``) gives one line per value. For each metric it prints
 the median and worst run of each side and their change, the change of the 90th percentile
 and the median per-run ratio on/off (each with a seeded bootstrap 95 % CI: ``--seed``), and

@@ -1,6 +1,6 @@
 """The safety filter's table: per (policy, scenario), what the filter buys and what it costs.
 
-One line per policy and scenario (the scenarios' sweep axes as leading columns, e.g. N, init,
+One line per policy and scenario (the scenarios' grid axes as leading columns, e.g. N, init,
 filter), from the per-run rows of a benchmark whose runs carry the safety columns
 (:data:`pairflock_env.task.metrics.SAFETY_METRIC_DOCS`).
 """

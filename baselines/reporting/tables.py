@@ -103,7 +103,7 @@ def summary_table(
 
     Default (the benchmark's tables): one line per (scenario, policy), scenarios in order of
     appearance, then their policies in order of appearance; leading columns ``keys`` (header,
-    row key), e.g. ``(("N", "n_uavs"),)`` for a sweep over N, then the policy.
+    row key), e.g. ``(("N", "n_uavs"),)`` for a grid over N, then the policy.
 
     Args:
         rows: one mapping per run.  metrics: (metric, header, cell) per column.

@@ -18,7 +18,7 @@ from pairflock_env.config.limits import LIMITS
 from pairflock_env.config.model import SCHEMA
 from pairflock_env.config.presets import PRESETS
 from pairflock_env.config.schema import Schema
-from pairflock_env.interfaces.pair_frame_params import FRAME_SCHEMA
+from pairflock_env.interfaces.pair_params import PAIR_INTERFACE_SCHEMA
 
 __all__ = ["main", "render"]
 
@@ -125,7 +125,7 @@ def _limits() -> list[str]:
 
 
 def _frame_params() -> list[str]:
-    sec = FRAME_SCHEMA.sections[0]
+    sec = PAIR_INTERFACE_SCHEMA.sections[0]
     out = ["", f"## {sec.title} (`frame_params`)", "", _text(sec.doc), ""]
     head = ["parameter", "type", "unit", "default", "valid", "meaning"]
     return out + _table(head, _field_rows(sec.fields))

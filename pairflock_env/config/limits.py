@@ -74,7 +74,7 @@ LIMITS: tuple[Limit, ...] = (
         MAX_GAIN,
         "SI",
         "largest flocking, pinning and surface gain: with |q|, |p| <= divergence_limit no sum "
-        "of the flocking sweep overflows",
+        "of the flocking pass overflows",
     ),
     Limit("MAX_WEIGHT", MAX_WEIGHT, "1", "largest reward weight"),
     Limit(

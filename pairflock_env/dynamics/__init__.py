@@ -42,5 +42,5 @@ VEHICLES: dict[str, Callable[[PairFlockConfig, int], VehicleModel]] = {
 }
 
 
-def make_vehicle(config: PairFlockConfig, num_envs: int) -> VehicleModel:
-    return VEHICLES[config.dynamics](config, num_envs)
+def make_vehicle(config: PairFlockConfig, num_swarms: int) -> VehicleModel:
+    return VEHICLES[config.dynamics](config, num_swarms)

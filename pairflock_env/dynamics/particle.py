@@ -19,7 +19,7 @@ class ParticleModel:
 
     name = "particle"
 
-    def __init__(self, config: PairFlockConfig, num_envs: int) -> None:
+    def __init__(self, config: PairFlockConfig, num_swarms: int) -> None:
         self.h = config.physics_dt
         self.substeps = config.substeps
         self.exact = config.integrator == "exact"

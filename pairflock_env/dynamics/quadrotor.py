@@ -468,11 +468,11 @@ class QuadrotorModel:
 
     name = "quadrotor"
 
-    def __init__(self, config: PairFlockConfig, num_envs: int) -> None:
+    def __init__(self, config: PairFlockConfig, num_swarms: int) -> None:
         if config.dim != 3:
             raise ValueError(f"dim={config.dim!r} is invalid: the quadrotor model needs dim=3")
         self.params = prm = QuadrotorParams(config)
-        B, N = int(num_envs), config.n_uavs
+        B, N = int(num_swarms), config.n_uavs
         self.agent_uavs = np.asarray(config.pairs, dtype=np.int64).reshape(-1)
         self.R = np.zeros((B, N, 3, 3))
         self.R_des = np.zeros((B, N, 3, 3))

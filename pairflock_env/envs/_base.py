@@ -22,7 +22,7 @@ __all__ = [
     "RENDER_MODES",
     "UNSET",
     "HeldStep",
-    "SwarmFrames",
+    "SwarmRenderers",
     "ViewLifecycle",
     "build_core_and_interface",
     "check_policy_actions",
@@ -101,7 +101,7 @@ def build_core_and_interface(
     check_render_mode(render_mode)
     if config is not None and not isinstance(config, PairFlockConfig):
         raise TypeError(f"config={config!r} is invalid: must be a PairFlockConfig or None")
-    core = PairFlockCore(config, num_envs=num_swarms, seed=seed, preset=preset, **overrides)
+    core = PairFlockCore(config, num_swarms=num_swarms, seed=seed, preset=preset, **overrides)
     return core, make_interface(interface, core.config, **interface_params)
 
 
@@ -225,7 +225,7 @@ def _held_decision(
     return HeldStep(out_obs, total / count[:, None], terminated, truncated, out_info)
 
 
-class SwarmFrames:
+class SwarmRenderers:
     """The one render path of every view: lazily created renderers, one per swarm.
 
     ``render(b)`` with ``render_mode=None`` warns and returns None (Gymnasium's convention);

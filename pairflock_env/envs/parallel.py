@@ -15,7 +15,7 @@ from pairflock_env.core import AGENT_INFO_KEYS, SWARM_INFO_KEYS
 from pairflock_env.envs._base import (
     RENDER_MODES,
     UNSET,
-    SwarmFrames,
+    SwarmRenderers,
     ViewLifecycle,
     build_core_and_interface,
     check_policy_actions,
@@ -206,7 +206,7 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         }
         self.state_space = spaces.Box(*state_bounds(cfg), dtype=np.float32)
         self.physical_obs: np.ndarray | None = None
-        self._frames = SwarmFrames(self.core, render_mode)
+        self._frames = SwarmRenderers(self.core, render_mode)
         self._title_values: tuple[float, float] | None = None  # of the render title
 
     # PettingZoo requires the same object on every call

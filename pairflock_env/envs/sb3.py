@@ -27,7 +27,7 @@ from pairflock_env.core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, check_count
 from pairflock_env.envs._base import (
     RENDER_MODES,
     UNSET,
-    SwarmFrames,
+    SwarmRenderers,
     ViewLifecycle,
     build_core_and_interface,
     check_policy_actions,
@@ -229,7 +229,7 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
         self.interface_name = name
         self.config = self.core.config
         self.layout = self.core.layout
-        self.num_swarms = self.core.num_envs
+        self.num_swarms = self.core.num_swarms
         self.agents_per_swarm = M = self.core.n_agents
         valid = AGENT_INFO_KEYS + SWARM_INFO_KEYS
         if isinstance(info_keys, str):
@@ -244,7 +244,7 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
         self.render_mode = render_mode
         self.num_rows = n_rows = self.num_swarms * M
         self._rows = [AgentRow(self, i) for i in range(n_rows)]
-        self._frames = SwarmFrames(self.core, render_mode)
+        self._frames = SwarmRenderers(self.core, render_mode)
         obs_space = spaces.Box(*self.interface.observation_bounds(), dtype=np.float32)
         act_space = spaces.Box(-1.0, 1.0, (self.config.dim,), np.float32)
         super().__init__(n_rows, obs_space, act_space)
@@ -411,13 +411,13 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
         if state["config"] != self.config.to_dict():
             raise ValueError("state was taken from an env with a different config")
         core = state["core"]
-        if core.num_envs != self.num_swarms:
+        if core.num_swarms != self.num_swarms:
             raise ValueError(
-                f"state has {core.num_envs} swarms, this env has num_swarms={self.num_swarms}"
+                f"state has {core.num_swarms} swarms, this env has num_swarms={self.num_swarms}"
             )
         self._frames.close()
         self.core = copy.deepcopy(core)
-        self._frames = SwarmFrames(self.core, self.render_mode)
+        self._frames = SwarmRenderers(self.core, self.render_mode)
         po = state["physical_obs"]
         self.physical_obs = None if po is None else po.copy()
         self._seeds = list(state["seeds"])

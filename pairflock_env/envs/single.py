@@ -14,7 +14,7 @@ from pairflock_env.config import PairFlockConfig
 from pairflock_env.envs._base import (
     RENDER_MODES,
     UNSET,
-    SwarmFrames,
+    SwarmRenderers,
     ViewLifecycle,
     build_core_and_interface,
     check_policy_actions,
@@ -60,7 +60,7 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
     ## Observation space
     ``Box(low, high, (M * n,), float32)``: ``obs.reshape(M, n)[m]`` is what UAV m sees.
     ``interface="pair"``: the normalised pair-frame features in [-5, 5] of
-    :class:`~pairflock_env.interfaces.PairFrameInterface`
+    :class:`~pairflock_env.interfaces.PairInterface`
     (``env.unwrapped.interface.fields``); ``interface="world"``: the physical observation of
     :class:`~pairflock_env.task.observations.ObsLayout` (``env.unwrapped.layout``), with finite
     bounds derived from the config (:mod:`pairflock_env.task.spaces`). The physical observation
@@ -87,7 +87,7 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
     ## Arguments
     ``preset`` (default ``"paper"``), ``config`` (a ``PairFlockConfig``), ``interface``
     (``"pair"`` or ``"world"``), ``interface_params`` (dict of
-    :class:`~pairflock_env.interfaces.PairFrameParams` fields), ``render_mode``
+    :class:`~pairflock_env.interfaces.PairInterfaceParams` fields), ``render_mode``
     (``"rgb_array"`` / ``"human"``), ``seed`` (of the swarm generator when ``reset`` gets
     none) and any ``PairFlockConfig`` field as a keyword. ``frame`` / ``frame_params`` are
     deprecated aliases of ``interface`` / ``interface_params``.
@@ -137,7 +137,7 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
         self.action_space = spaces.Box(-1.0, 1.0, (M * D,), np.float32)
         self.physical_obs: np.ndarray | None = None
         self._live = False
-        self._frames = SwarmFrames(self.core, render_mode)
+        self._frames = SwarmRenderers(self.core, render_mode)
 
     @property
     def reward_range(self) -> tuple[float, float]:

@@ -15,7 +15,7 @@ from pairflock_env.config import PairFlockConfig
 from pairflock_env.envs._base import (
     RENDER_MODES,
     UNSET,
-    SwarmFrames,
+    SwarmRenderers,
     ViewLifecycle,
     build_core_and_interface,
     check_policy_actions,
@@ -90,7 +90,7 @@ class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
             preset, config, overrides, num_envs, seed, name, params, render_mode
         )
         self.interface_name = name
-        self.num_envs = self.core.num_envs
+        self.num_envs = self.core.num_swarms
         self.num_swarms = self.num_rows = self.num_envs
         self.config = self.core.config
         self.layout = self.core.layout
@@ -112,7 +112,7 @@ class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
         self.physical_obs: np.ndarray | None = None
         self._needs_reset = np.zeros(self.num_envs, bool)
         self._was_reset = False
-        self._frames = SwarmFrames(self.core, render_mode)
+        self._frames = SwarmRenderers(self.core, render_mode)
 
     @property
     def reward_range(self) -> tuple[float, float]:

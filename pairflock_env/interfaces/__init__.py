@@ -11,7 +11,7 @@ by every view and by the loader, so training and evaluation cannot drift apart):
 ``"world"``
     the identity: raw observation, raw action, the core's reward (``pairflock_env.task.rewards``).
 
-``"pair"`` (:class:`PairFrameInterface`, the default for learning)
+``"pair"`` (:class:`PairInterface`, the default for learning)
     *Frame.* Everything is expressed in the pair frame of the observing UAV: ``e_r`` points at
     the partner, ``e_t`` is ``e_r`` turned by +90 degrees (3-D: ``e_t1`` horizontal, ``e_t2``
     completing a right-handed frame). Partner A's frame is partner B's turned by 180 degrees,
@@ -35,7 +35,7 @@ by every view and by the loader, so training and evaluation cannot drift apart):
     sqrt(dim) times more along a diagonal), and the env never clips.
 
     *Observation* (float32, every entry in [-5, 5], named in
-    :attr:`PairFrameInterface.fields`): the pair error ``e = ||z|| - d_m`` and the relative
+    :attr:`PairInterface.fields`): the pair error ``e = ||z|| - d_m`` and the relative
     velocity in the pair frame, each twice: linear (``/ position_scale``,
     ``/ velocity_scale``) for the large transient and ``symlog(x / fine_scale) / 8`` so that
     millimetres stay visible to the network; the flocking difference ``f_j - f_i`` and the own
@@ -100,7 +100,7 @@ import numpy as np
 
 from pairflock_env.config import PairFlockConfig
 from pairflock_env.config.fields import UnknownFieldError
-from pairflock_env.interfaces.pair_frame_params import FRAME_SCHEMA, PairFrameParams
+from pairflock_env.interfaces.pair_params import PAIR_INTERFACE_SCHEMA, PairInterfaceParams
 from pairflock_env.task.observations import ObsLayout
 from pairflock_env.task.rewards import DIVERGENCE_PENALTY
 from pairflock_env.task.spaces import (
@@ -118,8 +118,8 @@ except ImportError:  # pragma: no cover - another numpy layout
 __all__ = [
     "INTERFACES",
     "LearningInterface",
-    "PairFrameInterface",
-    "PairFrameParams",
+    "PairInterface",
+    "PairInterfaceParams",
     "WorldInterface",
     "closest_approach",
     "interface_from_dict",
@@ -335,7 +335,7 @@ _CLIP = 5.0
 _SYMLOG_DIV = 8.0
 
 
-class PairFrameInterface(LearningInterface):
+class PairInterface(LearningInterface):
     """Pair-frame observation, feed-forward + pair-frame action, log-accuracy reward.
 
     See the module docstring for the equations and the reasons.
@@ -346,7 +346,7 @@ class PairFrameInterface(LearningInterface):
 
     def __init__(self, config: PairFlockConfig, **params: Any) -> None:
         super().__init__(config)
-        p = PairFrameParams(**params)
+        p = PairInterfaceParams(**params)
         if p.accel_scale is None:
             p = dataclasses.replace(p, accel_scale=float(config.pair_accel_limit))
         if p.max_accel is None:
@@ -523,9 +523,10 @@ class PairFrameInterface(LearningInterface):
     @property
     def reward_range(self) -> tuple[float, float]:
         """(low, 0): the worst case of every term at once, with the largest pair error and
-        separation a non-diverged state allows (:func:`~pairflock_env.task.spaces.pair_error_bound`),
-        or ``-DIVERGENCE_PENALTY``. Typical rewards are of order one per control step (see
-        ``docs/clients.md``), far inside this guaranteed range."""
+        separation a non-diverged state allows
+        (:func:`~pairflock_env.task.spaces.pair_error_bound`), or ``-DIVERGENCE_PENALTY``.
+        Typical rewards are of order one per control step (see ``docs/clients.md``), far
+        inside this guaranteed range."""
         p = self.params
         e, s = pair_error_bound(self.config), separation_bound(self.config)
         worst = (
@@ -544,12 +545,12 @@ class PairFrameInterface(LearningInterface):
 
 
 def _check_period(v: Any) -> int:
-    return FRAME_SCHEMA.fields["decision_period"].kind.check("decision_period", v, {})
+    return PAIR_INTERFACE_SCHEMA.fields["decision_period"].kind.check("decision_period", v, {})
 
 
 INTERFACES: dict[str, type[LearningInterface]] = {
     "world": WorldInterface,
-    "pair": PairFrameInterface,
+    "pair": PairInterface,
 }
 
 
@@ -578,5 +579,5 @@ def interface_from_dict(d: Mapping[str, Any], config: PairFlockConfig) -> Learni
     params = {k: v for k, v in d.items() if k != "name"}
     if d["name"] == "pair":
         # a stored model keeps the parameter names of the release that trained it
-        params = FRAME_SCHEMA.resolve(params, warn=False)
+        params = PAIR_INTERFACE_SCHEMA.resolve(params, warn=False)
     return make_interface(d["name"], config, **params)

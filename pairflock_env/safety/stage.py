@@ -31,7 +31,7 @@ class SafetyStage:
     Args:
         config: the env config (section ``safety``; ``pair_accel_limit``, ``dt``, ...).
         agent_uavs: (M,) UAV index of each agent.
-        num_envs: B.
+        num_swarms: B.
         partner_uavs: (M,) UAV index of each agent's partner (constrained at any distance);
             None: only the UAVs within the sensing radius.
     """
@@ -40,11 +40,11 @@ class SafetyStage:
         self,
         config: Any,
         agent_uavs: np.ndarray,
-        num_envs: int,
+        num_swarms: int,
         partner_uavs: np.ndarray | None = None,
     ) -> None:
         self.enabled = config.safety_filter == "cbf"
-        B, M = int(num_envs), int(np.size(agent_uavs))
+        B, M = int(num_swarms), int(np.size(agent_uavs))
         self.agent_uavs = np.asarray(agent_uavs, dtype=np.int64)
         self.filter: SafetyFilter | None = None
         self.output: SafetyOutput | None = None

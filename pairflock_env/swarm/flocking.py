@@ -1,4 +1,4 @@
-"""The flocking protocol of eqs. 11-19 and the proximity quantities, in one sweep over pairs.
+"""The flocking protocol of eqs. 11-19 and the proximity quantities, in one pass over pairs.
 
 For every UAV i of every swarm b (arrays shaped (B, N, dim)):
 
@@ -9,7 +9,7 @@ For every UAV i of every swarm b (arrays shaped (B, N, dim)):
     a_i = f_i^g + f_i^v + h_i f_i^gamma                                   eq. 11 without f^x
     N_i = { j != i : ||q_i - q_j|| < r }                                  eq. 2
 
-The same sweep also yields what metrics and rewards need, so no second pass over the pairs
+The same pass also yields what metrics and rewards need, so no second pass over the pairs
 is made: each UAV's smallest distance to any UAV other than its partner, the number of UAV
 pairs closer than the collision distance, the size of the largest connected component of
 the interaction graph (union-find), the velocity mismatch to the leader, and a per-swarm
@@ -20,7 +20,7 @@ Two ways to find the pairs, same results: all pairs (O(N^2) per swarm), or a
 density). The grid path visits the pairs of each UAV i with j > i in increasing j, exactly as
 the all-pairs loop does, so every floating-point sum is formed in the same order and the two
 paths agree bit for bit. Swarms a grid cannot hold (non-finite coordinates) use all pairs.
-The per-pair sweep for observations and eq. 28 (``pair_pass``) lives in
+The per-pair pass for observations and eq. 28 (``pair_pass``) lives in
 :mod:`pairflock_env.swarm.pair_pass` and is re-exported here.
 
 This is the only implementation of these equations; every view and vehicle model calls it.
@@ -46,18 +46,18 @@ from pairflock_env.swarm.grid import (
     one_ring,
     ring_bound2,
 )
-from pairflock_env.swarm.pair_pass import pair_pass  # re-exported: the pair sweep lived here before
+from pairflock_env.swarm.pair_pass import pair_pass  # re-exported: the pair pass lived here before
 
 __all__ = ["FlockScalars", "FlockingParams", "flocking_pass", "pair_pass"]
 
 FlockScalars = namedtuple(
     "FlockScalars", ["a", "b_r", "inv_s2", "r2", "cons", "c1", "c2", "coll2", "limit"]
 )
-FlockScalars.__doc__ = "The scalar parameters of the flocking sweep, as the kernels read them."
+FlockScalars.__doc__ = "The scalar parameters of the flocking pass, as the kernels read them."
 
 
 class FlockingParams:
-    """Scalar parameters of the flocking sweep, unpacked once from a config.
+    """Scalar parameters of the flocking pass, unpacked once from a config.
 
     Attributes ``a``, ``b_r``, ``inv_sigma2``, ``r2``, ``consensus``, ``c1``, ``c2``,
     ``coll2``, ``limit`` read one float64 vector (``vector``, in :data:`FlockScalars` order),
@@ -95,7 +95,7 @@ def _scalars(v):
 
 
 # ---------------------------------------------------------------------------------------
-# per-swarm pieces of the flocking sweep
+# per-swarm pieces of the flocking pass
 # ---------------------------------------------------------------------------------------
 @jit_inline
 def _count_unpaired(partner):
@@ -199,7 +199,7 @@ def _separation(min_d2, b, i, j, partner_i, d2):
 
 
 @jit_kernel
-def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size):
+def _pass_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size):
     """Every pair i < j of swarm b; returns the number of collisions."""
     N = q.shape[1]
     nc = 0
@@ -231,8 +231,8 @@ def _sort_by_index(nb_j, nb_d2, n):
 
 
 @jit_kernel
-def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2):
-    """:func:`_sweep_all_pairs` over the grid's one-ring pairs, same order and results."""
+def _pass_grid(q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2):
+    """:func:`_pass_all_pairs` over the grid's one-ring pairs, same order and results."""
     N = q.shape[1]
     nc = 0
     for i in range(N):
@@ -269,7 +269,7 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2
 
 @jit_kernel
 def _flock_swarms(q, p, ql, pl, h, partner, prm, out, work, g):
-    """Every swarm: grid sweep where ``g`` holds the swarm, all pairs otherwise."""
+    """Every swarm: grid pass where ``g`` holds the swarm, all pairs otherwise."""
     acc, min_d2, n_coll, lcc, bad, vmis, vmax = out
     parent, size, nb_j, nb_d2 = work
     n_unpaired = _count_unpaired(partner)
@@ -277,16 +277,14 @@ def _flock_swarms(q, p, ql, pl, h, partner, prm, out, work, g):
         _velocity_mismatch(p, pl, partner, n_unpaired, b, vmis, vmax)
         bad[b] = _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size)
         if g is not None and g.ok[b]:
-            n_coll[b] = _sweep_grid(
-                q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2
-            )
+            n_coll[b] = _pass_grid(q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2)
         else:
-            n_coll[b] = _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size)
+            n_coll[b] = _pass_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size)
         lcc[b] = _largest_component(parent, size)
 
 
 # The entry points take arrays one by one: the dispatcher types plain arrays fastest, which
-# matters for small swarms, where a sweep takes a few microseconds.
+# matters for small swarms, where a pass takes a few microseconds.
 @jit_kernel
 def _flocking_kernel(
     q, p, ql, pl, h, partner, prm, acc, min_d2, ncol, lcc, bad, vmis, vmax, parent, size, nbj, nbd

@@ -1,6 +1,6 @@
 """Neighbour search: the distance and K-nearest primitives, and a uniform grid (cell list).
 
-Every consumer of neighbours (the flocking sweep, separations, collisions, connectivity, the
+Every consumer of neighbours (the flocking pass, separations, collisions, connectivity, the
 shared-neighbour count of eq. 28, the K nearest for observations, pinning, placement and the
 safety filter) reads distances through the primitives here, so the all-pairs path and the
 grid path compare exactly the same floating-point numbers and give the same answers.
@@ -19,7 +19,7 @@ folding only costs extra candidates. Swarms with non-finite coordinates, or coor
 about 2^36 cells, are marked not ``ok`` and every consumer falls back to all pairs for them.
 
 Within a bucket UAVs are listed in increasing index order (the counting sort is stable), which
-lets the flocking sweep reproduce the all-pairs summation order bit for bit.
+lets the flocking pass reproduce the all-pairs summation order bit for bit.
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ _CELL_MARGIN = 1e-3
 _ROUNDING = 1e-4
 _MAX_CELLS = 2.0**36
 
-# Every kernel here and in the sweeps is compiled without numba's reference counting: they
+# Every kernel here and in the passes is compiled without numba's reference counting: they
 # never allocate, and the count updates that numba adds around inlined helpers taking arrays
 # inside branchy loops (which its pruning pass cannot remove, numba issue #2350) cost 5-30x
 # in the pair loops.
@@ -493,7 +493,7 @@ class NeighborGrid:
     """Uniform cell lists of B swarms of N UAVs, rebuilt from the positions each step.
 
     Args:
-        num_envs: number of swarms B.
+        num_swarms: number of swarms B.
         n_uavs: UAVs per swarm N.
         dim: 2 or 3.
         cell_size: smallest cell edge (m): the largest distance that the one-ring queries
@@ -505,7 +505,7 @@ class NeighborGrid:
     change: a grid describes the positions it was last built from (it keeps a reference to
     that array, not a copy). One thread at a time per grid (queries share scratch space).
 
-    The sweeps (:func:`~pairflock_env.swarm.flocking.flocking_pass`,
+    The passes (:func:`~pairflock_env.swarm.flocking.flocking_pass`,
     :func:`~pairflock_env.swarm.pair_pass.pair_pass`) take a grid as ``grid=``; other code
     asks :meth:`within` / :meth:`neighbors_of`, or, inside numba, calls
     ``within_radius(q, b, point, r2, exclude, GridArrays(*grid.arrays), out)``.
@@ -518,9 +518,9 @@ class NeighborGrid:
     """
 
     def __init__(
-        self, num_envs: int, n_uavs: int, dim: int, cell_size: float, max_cells: int | None = None
+        self, num_swarms: int, n_uavs: int, dim: int, cell_size: float, max_cells: int | None = None
     ) -> None:
-        for name, v, lo in (("num_envs", num_envs, 1), ("n_uavs", n_uavs, 1), ("dim", dim, 2)):
+        for name, v, lo in (("num_swarms", num_swarms, 1), ("n_uavs", n_uavs, 1), ("dim", dim, 2)):
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < lo:
                 raise ValueError(f"{name}={v!r} is invalid: must be an integer >= {lo}")
         if dim > 3:
@@ -533,7 +533,7 @@ class NeighborGrid:
             raise ValueError(f"max_cells={max_cells!r} is invalid: must be an integer >= 1")
         if max_cells < 1:
             raise ValueError(f"max_cells={max_cells!r} is invalid: must be an integer >= 1")
-        B, N = int(num_envs), int(n_uavs)
+        B, N = int(num_swarms), int(n_uavs)
         self.shape = (B, N, int(dim))
         self.cell_size = float(cell_size)
         h = self.cell_size * (1.0 + _CELL_MARGIN)
@@ -606,7 +606,7 @@ class NeighborGrid:
 
 
 def check_grid(grid, shape: tuple[int, ...], need2: float, what: str) -> None:
-    """Validate the ``grid`` argument of a sweep over arrays of ``shape`` whose one-ring must
+    """Validate the ``grid`` argument of a pass over arrays of ``shape`` whose one-ring must
     reach sqrt(need2) (named ``what``); ``None`` (all pairs) always passes."""
     if grid is None:
         return

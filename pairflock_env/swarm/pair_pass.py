@@ -1,6 +1,6 @@
-"""The pair sweep: shared neighbours of each pair (eq. 28) and each agent's K nearest UAVs.
+"""The pair pass: shared neighbours of each pair (eq. 28) and each agent's K nearest UAVs.
 
-Like the flocking sweep it runs over all pairs or over a
+Like the flocking pass it runs over all pairs or over a
 :class:`~pairflock_env.swarm.grid.NeighborGrid`, with identical results: the shared count is
 an integer over the same distance tests, and the K nearest are the K smallest
 (squared distance, index) pairs whatever order the candidates are found in.

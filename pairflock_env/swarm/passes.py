@@ -1,8 +1,8 @@
-"""The neighbour sweep of one state: every consumer of neighbours served from one search.
+"""The neighbour pass of one state: every consumer of neighbours served from one search.
 
-:class:`NeighborSweep` owns the search the config asks for (``neighbor_search``: all pairs,
+:class:`NeighborPass` owns the search the config asks for (``neighbor_search``: all pairs,
 or a :class:`~pairflock_env.swarm.grid.NeighborGrid` rebuilt from the positions before each
-sweep) and the output buffers of the two sweeps that read it:
+pass) and the output buffers of the two passes that read it:
 
 * :func:`~pairflock_env.swarm.flocking.flocking_pass`: the flocking command (eqs. 11-19), each
   UAV's nearest non-partner distance, collisions and the largest connected component;
@@ -11,7 +11,7 @@ sweep) and the output buffers of the two sweeps that read it:
 
 Both paths give the same results (the grid visits the same pairs in the same summation
 order); the grid is O(N) per swarm for a flock of bounded density instead of O(N^2). The
-grid stays available after the sweep (:attr:`NeighborSweep.grid`) for any later stage that
+grid stays available after the pass (:attr:`NeighborPass.grid`) for any later stage that
 needs the neighbours of the same state.
 """
 
@@ -24,24 +24,24 @@ from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pas
 from pairflock_env.swarm.grid import NeighborGrid
 from pairflock_env.task.pairing import agent_pair_state
 
-__all__ = ["NeighborSweep", "make_grid"]
+__all__ = ["NeighborPass", "make_grid"]
 
 
-def make_grid(cfg: PairFlockConfig, num_envs: int) -> NeighborGrid | None:
-    """The grid every sweep of ``cfg`` can use (cells of ``max(radius, collision_distance)``),
+def make_grid(cfg: PairFlockConfig, num_swarms: int) -> NeighborGrid | None:
+    """The grid every pass of ``cfg`` can use (cells of ``max(radius, collision_distance)``),
     or ``None`` when ``neighbor_search`` resolves to all pairs."""
     if not cfg.uses_grid:
         return None
     cell = max(cfg.radius, cfg.collision_distance)
-    return NeighborGrid(num_envs, cfg.n_uavs, cfg.dim, cell_size=cell)
+    return NeighborGrid(num_swarms, cfg.n_uavs, cfg.dim, cell_size=cell)
 
 
-class NeighborSweep:
-    """The sweeps of B swarms of one config, with their buffers and (optionally) a grid.
+class NeighborPass:
+    """The passes of B swarms of one config, with their buffers and (optionally) a grid.
 
     Args:
         cfg: the configuration (pairs, radius, obs_neighbors, neighbor_search ...).
-        num_envs: number of swarms B.
+        num_swarms: number of swarms B.
 
     It holds the one definition of the agents' indexing that the core shares:
     ``agent_uavs`` (M,) A0, B0, A1, B1, ...; ``partner_uavs`` (M,); ``agent_pair`` (M,) the
@@ -49,7 +49,7 @@ class NeighborSweep:
     partner UAV of each UAV, or -1.
     """
 
-    def __init__(self, cfg: PairFlockConfig, num_envs: int) -> None:
+    def __init__(self, cfg: PairFlockConfig, num_swarms: int) -> None:
         pairs = np.asarray(cfg.pairs, dtype=np.int64)  # (P, 2)
         self.cfg = cfg
         self.params = FlockingParams(cfg)
@@ -59,7 +59,7 @@ class NeighborSweep:
         self.agent_dm = cfg.d_m_array[self.agent_pair]
         self.partner_of = np.full(cfg.n_uavs, -1, np.int64)
         self.partner_of[self.agent_uavs] = self.partner_uavs
-        self.grid = make_grid(cfg, num_envs)
+        self.grid = make_grid(cfg, num_swarms)
         self.flock_out: dict[str, np.ndarray] | None = None
         self.pair_out: dict[str, np.ndarray] | None = None
 
@@ -71,7 +71,8 @@ class NeighborSweep:
         leader_p: np.ndarray,
         pinned: np.ndarray,
     ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
-        """Sweep the state q, p (B, N, dim) with the leader at ``leader_q``, ``leader_p``.
+        """Run the neighbour pass over the state q, p (B, N, dim) with the leader at
+        ``leader_q``, ``leader_p``.
 
         Returns the flocking outputs (:func:`~pairflock_env.swarm.flocking.flocking_pass`) and the
         agents' pair quantities (B, M): those of

@@ -114,14 +114,14 @@ def _saturating_float(v: numbers.Real) -> float:
 
 
 def check_pair_actions(
-    actions: Any, num_envs: int, n_agents: int, dim: int, agent_uavs: np.ndarray
+    actions: Any, num_swarms: int, n_agents: int, dim: int, agent_uavs: np.ndarray
 ) -> np.ndarray:
     """Pair actions as float64 (B, M, dim); (M, dim) is accepted when B = 1.
 
     Raises ``TypeError`` for non-real input and ``ValueError`` for another shape or a NaN/inf
     (naming the swarm, the agent and its UAV). Nothing is changed by a rejected call.
     """
-    B, M, D = num_envs, n_agents, dim
+    B, M, D = num_swarms, n_agents, dim
     a = real_array(actions, "actions")
     if a.shape != (B, M, D):
         if B == 1 and a.shape == (M, D):

@@ -14,7 +14,7 @@ class PartnerDelayBuffer:
 
     Args:
         delay: the delay d in control steps (>= 1).
-        num_envs, n_agents, dim: B, M and dim of the samples.
+        num_swarms, n_agents, dim: B, M and dim of the samples.
         partner_col: agent column of each agent's partner (M,).
 
     A freshly reset swarm has no older samples, so its whole history is filled with the
@@ -23,12 +23,12 @@ class PartnerDelayBuffer:
     """
 
     def __init__(
-        self, delay: int, num_envs: int, n_agents: int, dim: int, partner_col: np.ndarray
+        self, delay: int, num_swarms: int, n_agents: int, dim: int, partner_col: np.ndarray
     ) -> None:
         if delay < 1:
             raise ValueError(f"delay={delay!r} is invalid: must be >= 1 control step")
         self.delay = int(delay)
-        self._hist = np.zeros((3, self.delay + 1, num_envs, n_agents, dim))
+        self._hist = np.zeros((3, self.delay + 1, num_swarms, n_agents, dim))
         self._pos = 0
         self._partner_col = np.asarray(partner_col)
 

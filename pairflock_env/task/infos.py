@@ -97,7 +97,7 @@ def make_info(
     Args:
         pair: the agents' pair quantities ``pair_distance``, ``pair_error``,
             ``sliding_surface``, ``min_separation``, ``shared_neighbors`` (B, M).
-        flock: the flocking sweep's outputs (``collisions``, ``largest_component``,
+        flock: the flocking pass's outputs (``collisions``, ``largest_component``,
             ``velocity_mismatch``, ``velocity_mismatch_max``, (B,)); copied.
         u: the applied pair command (B, M, dim), m/s^2; clipped: (B, M) bool.
         sim_time: (B,) s (copied); diverged: (B,) bool; terms: reward terms (B, M).

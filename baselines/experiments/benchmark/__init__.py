@@ -8,7 +8,7 @@
     python -m baselines.benchmark --suite quick --video     # + an mp4 of one episode
 
 A suite supplies defaults (preset, policies, scenarios, seeds); every option overrides them.
-Scenarios are the preset plus overrides: the grid product of the sweep options (``--n-uavs 20
+Scenarios are the preset plus overrides: the grid product of the grid options (``--n-uavs 20
 50 100``, ``--delay 0 5``, ``--set key=v1,v2``) times the listed ``--scenario`` entries.
 Every policy runs the same seeds, hence the same initial states (and the same noise and
 disturbance draws). Writes to ``--out``:

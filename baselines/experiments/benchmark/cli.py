@@ -39,19 +39,19 @@ def _epilog() -> str:
 
 
 def _scenario_options(p: argparse.ArgumentParser) -> None:
-    sweep = p.add_argument_group("scenarios (each option with several values is a sweep axis)")
+    grid = p.add_argument_group("scenarios (each option with several values is a grid axis)")
     for opt, field, typ, text in SHORTCUTS:
-        sweep.add_argument(
+        grid.add_argument(
             opt, nargs="+", type=typ, default=None, metavar="V", help=f"{text} [{field}]"
         )
-    sweep.add_argument(
+    grid.add_argument(
         "--set",
         action="append",
         default=[],
         metavar="KEY=V1,V2",
-        help="sweep any config field (repeatable)",
+        help="vary any config field (repeatable)",
     )
-    sweep.add_argument(
+    grid.add_argument(
         "--scenario",
         action="append",
         default=None,
@@ -98,7 +98,7 @@ def _seed_and_execution_options(p: argparse.ArgumentParser) -> None:
         type=int,
         default=None,
         help="seeds per job (default: all seeds of a (scenario, policy) in one "
-        "batched core); smaller spreads a sweep over more workers",
+        "batched core); smaller spreads a grid over more workers",
     )
 
 
@@ -297,7 +297,7 @@ def _built_policies(specs, scenarios, configs, parser) -> dict[str, str]:
 
 
 def _table_keys(grid, suite: Suite, listed) -> tuple[tuple[str, str], ...]:
-    """The tables lead with the sweep axes when the scenarios are a plain grid ("| N | ..."):
+    """The tables lead with the grid axes when the scenarios are a plain grid ("| N | ..."):
     the suite's own axes, and any other axis with several values."""
     from baselines.evaluation.specs import SHORT_NAMES
     from baselines.reporting.tables import SCENARIO_KEYS

@@ -1,4 +1,4 @@
-"""Named benchmark suites (defaults of a run) and the sweep shortcut options."""
+"""Named benchmark suites (defaults of a run) and the grid shortcut options."""
 
 from __future__ import annotations
 
@@ -96,7 +96,7 @@ SUITES: dict[str, Suite] = {
     ),
 }
 
-#: sweep shortcuts: option -> (config field, type, help)
+#: grid shortcuts: option -> (config field, type, help)
 SHORTCUTS = (
     ("--n-uavs", "n_uavs", int, "swarm sizes N"),
     ("--dim", "dim", int, "spatial dimension (2 or 3)"),

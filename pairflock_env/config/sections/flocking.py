@@ -144,7 +144,7 @@ DERIVED = (
         1e-30,
         1e30,
         "1/m^2",
-        "the exponent scale of the repulsion in the flocking sweep",
+        "the exponent scale of the repulsion in the flocking pass",
     ),
     Derived(
         "r^2",
@@ -153,6 +153,6 @@ DERIVED = (
         1e-6,
         MAX_DISTANCE**2,
         "m^2",
-        "squared perception radius of the flocking and neighbour sweeps",
+        "squared perception radius of the flocking and neighbour passes",
     ),
 )

@@ -145,6 +145,6 @@ DERIVED = (
         0.0,
         MAX_DISTANCE**2,
         "m^2",
-        "squared collision distance of the flocking sweep",
+        "squared collision distance of the flocking pass",
     ),
 )

@@ -134,9 +134,9 @@ class SafetyFilter:
             ]
         )
 
-    def allocate(self, num_envs: int, dim: int) -> SafetyOutput:
-        """Output arrays for ``num_envs`` swarms in ``dim`` dimensions."""
-        return SafetyOutput.empty(int(num_envs), self.agents.size, int(dim))
+    def allocate(self, num_swarms: int, dim: int) -> SafetyOutput:
+        """Output arrays for ``num_swarms`` swarms in ``dim`` dimensions."""
+        return SafetyOutput.empty(int(num_swarms), self.agents.size, int(dim))
 
     def apply(
         self,

@@ -5,7 +5,7 @@ They live in one module on purpose: numba's on-disk cache keys a compiled functi
 own source file only, so a kernel calling a jitted function from another file could keep
 running a stale compiled copy of it after that file changed. The one call out is the grid
 query ``within_radius`` of :mod:`pairflock_env.swarm.grid` (one neighbour search for the whole
-project), as in the flocking sweeps: after editing ``neighbors.py``, clear the numba cache
+project), as in the flocking passes: after editing ``neighbors.py``, clear the numba cache
 (the ``__pycache__`` folders) before trusting a run of the filter on the grid.
 """
 

@@ -1,7 +1,7 @@
 """Declared parameters of the pair-frame learning interface (``frame="pair"``).
 
-:class:`PairFrameParams` is the second configuration of the project: the parameters of
-:class:`pairflock_env.interfaces.PairFrameInterface` (given as ``frame_params={...}`` to the
+:class:`PairInterfaceParams` is the second configuration of the project: the parameters of
+:class:`pairflock_env.interfaces.PairInterface` (given as ``frame_params={...}`` to the
 learning views and stored with every trained model). It is declared like
 :class:`~pairflock_env.config.PairFlockConfig` (type, unit, range, default and meaning per
 field), so that validation, messages and its table in ``docs/config.md`` come from one place.
@@ -13,13 +13,13 @@ from __future__ import annotations
 from pairflock_env.config.fields import Field, Flag, Int, OrNone, Real
 from pairflock_env.config.schema import Record, Schema, Section, declare_record
 
-__all__ = ["FRAME_SCHEMA", "PairFrameParams"]
+__all__ = ["PAIR_INTERFACE_SCHEMA", "PairInterfaceParams"]
 
 _SCALE = Real(1e-6, 1e9)
 _W = Real(0.0, 1e6)
 _ACCEL = OrNone(Real(1e-6, 1e6), "the config's pair_accel_limit, then stored")
-_FRAME_SECTION = Section(
-    "pair_frame",
+_SECTION = Section(
+    "pair_interface",
     "Pair-frame learning interface",
     'interface="pair" (pairflock_env.interfaces); give them as interface_params={...}.',
     (
@@ -153,15 +153,15 @@ _FRAME_SECTION = Section(
     ),
 )
 
-#: the declared parameters of :class:`PairFrameParams`
-FRAME_SCHEMA = Schema("pair-frame parameter", (_FRAME_SECTION,))
+#: the declared parameters of :class:`PairInterfaceParams`
+PAIR_INTERFACE_SCHEMA = Schema("pair-interface parameter", (_SECTION,))
 
-PairFrameParams = declare_record(
-    "PairFrameParams",
-    FRAME_SCHEMA,
+PairInterfaceParams = declare_record(
+    "PairInterfaceParams",
+    PAIR_INTERFACE_SCHEMA,
     Record,
     "pairflock_env.interfaces",  # where users import it from (and old pickles find it)
-    """Parameters of :class:`PairFrameInterface` (units and ranges: docs/config.md).
+    """Parameters of :class:`PairInterface` (units and ranges: docs/config.md).
 
     A frozen dataclass with keyword-only construction; unknown names raise ``TypeError`` with
     a did-you-mean hint, bad values ``ValueError``, each naming the parameter.
