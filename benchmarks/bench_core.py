@@ -31,7 +31,8 @@ import numpy as np  # noqa: E402
 from _timing import median_rate, print_breakdown  # noqa: E402
 
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
-from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pass  # noqa: E402
+from pairflock_env.swarm.flocking import flocking_params, flocking_pass  # noqa: E402
+from pairflock_env.swarm.pair_pass import pair_pass  # noqa: E402
 
 SECTIONS = ("core", "pettingzoo", "breakdown", "kernels", "large", "threshold")
 _CLOCK = {"clock": time.perf_counter}  # --cpu-time switches to time.process_time
@@ -139,7 +140,7 @@ def bench_kernels(kind: str, N: int, B: int, grid: bool, repeats: int, min_time:
     from pairflock_env.swarm.grid import NeighborGrid
 
     cfg = make_config("paper", n_uavs=N)
-    prm = FlockingParams(cfg)
+    prm = flocking_params(cfg)
     q, p = kernel_state(kind, N, B)
     lq, lp, pinned = np.zeros((B, 2)), np.zeros((B, 2)), np.ones((B, N))
     agents, partners = np.array([0, 1]), np.array([1, 0])

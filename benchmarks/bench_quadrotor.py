@@ -29,7 +29,8 @@ from _timing import median_rate, print_breakdown  # noqa: E402
 
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
 from pairflock_env.dynamics.quadrotor import QuadrotorModel  # noqa: E402
-from pairflock_env.swarm.flocking import flocking_pass, pair_pass  # noqa: E402
+from pairflock_env.swarm.flocking import flocking_pass  # noqa: E402
+from pairflock_env.swarm.pair_pass import pair_pass  # noqa: E402
 
 PRESET = "paper-quadrotor"
 TARGET_B1 = 20.0  # simulated s per wall s at B = 1 through PettingZoo

@@ -61,6 +61,7 @@ import numpy as np
 from baselines.controllers.sliding_mode import SlidingModeController
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.safety import SafetyFilter, SafetyParams
+from pairflock_env.safety.cbf.kernels import BARRIER
 
 
 def states(N: int, B: int, limit: float, params: dict):
@@ -342,7 +343,9 @@ def main(argv=None) -> None:
     cfg, core, filt, cases = states(N, B, args.limit, {})
     buf = filt.allocate(B, cfg.dim)
     full = SafetyFilter(filt.params, core.agent_uavs, N, core.partner_uavs)
-    full._pr[9] = 0.0  # the kernel's skip switch (_kernels._far): evaluate every UAV
+    full._pr[BARRIER.index.skip_far] = (
+        0.0  # the kernel's skip switch (_kernels._far): evaluate every UAV
+    )
     buf_full = full.allocate(B, cfg.dim)
     actions = np.zeros((B, core.n_agents, cfg.dim))
 

@@ -22,7 +22,7 @@ from pairflock_env.safety import (
     project,
     safety_filter,
 )
-from pairflock_env.safety.cbf.kernels import _far, _far_terms, _sigma_min
+from pairflock_env.safety.cbf.kernels import BARRIER, _far, _far_terms, _sigma_min
 
 # ----------------------------------------------------------------------------- references
 
@@ -575,7 +575,7 @@ def test_skipping_far_uavs_changes_no_command():
         un = rng.normal(0, P.accel_limit, (B, M, D))
         on = SafetyFilter(P, ag, N, mates)
         off = SafetyFilter(P, ag, N, mates)
-        off._pr[9] = 0.0
+        off._pr[BARRIER.index.skip_far] = 0.0
         a, b = on.apply(q, p, f, un), off.apply(q, p, f, un)
         for x, y in zip(a.arrays()[:4], b.arrays()[:4], strict=True):
             assert np.array_equal(x, y)
@@ -628,7 +628,7 @@ def test_the_skip_changes_no_command_at_its_threshold_where_rounding_is_hardest(
         ag, mates = ([0, 1], [1, 0]) if coop else ([0], None)
         on = SafetyFilter(P, ag, 2, mates)
         off = SafetyFilter(P, ag, 2, mates)
-        off._pr[9] = 0.0
+        off._pr[BARRIER.index.skip_far] = 0.0
         if d is None:  # bisect the skip's threshold for this closing speed
             fn = fscale * P.accel_limit
             far = _far_terms(on._pr, fn, coop)
@@ -672,7 +672,7 @@ def test_a_fast_member_of_another_pair_is_not_left_out_by_the_shortened_search()
     P = SafetyParams(accel_limit=50.0, sensing_radius=100.0)
     on = SafetyFilter(P, agents, N, partners)
     off = SafetyFilter(P, agents, N, partners)
-    off._pr[9] = 0.0
+    off._pr[BARRIER.index.skip_far] = 0.0
     f = np.zeros((1, 4, 2))
     un = np.zeros((1, 4, 2))
     un[0, 0] = (50.0, 0.0)  # agent 0 pushes towards the other pair

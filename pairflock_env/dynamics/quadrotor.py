@@ -74,6 +74,7 @@ import numpy as np
 from numba import njit
 
 from pairflock_env.config import PairFlockConfig
+from pairflock_env.kernels import KernelParams
 from pairflock_env.math3d import so3_exp_scalar
 
 __all__ = ["ROTOR_ANGLES_DEG", "ROTOR_SPIN", "QuadrotorModel", "QuadrotorParams"]
@@ -83,10 +84,39 @@ ROTOR_ANGLES_DEG = (45.0, 135.0, 225.0, 315.0)
 #: sign of each rotor's reaction torque about body z (Mz = kappa * sum(spin_i T_i))
 ROTOR_SPIN = (1.0, -1.0, 1.0, -1.0)
 
-# indices into the kernel's parameter vector
-_M, _G, _JX, _JY, _JZ, _D, _KAPPA, _KF, _TMIN, _TMAX = range(10)
-_ALPHA, _KD, _KRX, _KRY, _KRZ, _KWX, _KWY, _KWZ, _AMAX, _TANTILT = range(10, 20)
-_FZMIN, _CPSI, _SPSI, _COSCRASH, _GROUND, _DESAT, _NPARAM = range(20, 27)
+#: the quadrotor kernel's parameters (pairflock_env.kernels)
+QUADROTOR = KernelParams(
+    "Quadrotor",
+    (
+        "mass",
+        "gravity",
+        "inertia_x",
+        "inertia_y",
+        "inertia_z",
+        "rotor_offset",
+        "kappa",
+        "thrust_coeff",
+        "thrust_min",
+        "thrust_max",
+        "motor_alpha",
+        "drag",
+        "k_R_x",
+        "k_R_y",
+        "k_R_z",
+        "k_w_x",
+        "k_w_y",
+        "k_w_z",
+        "accel_limit",
+        "tan_tilt_limit",
+        "thrust_floor",
+        "cos_yaw",
+        "sin_yaw",
+        "cos_crash_tilt",
+        "ground_altitude",
+        "desaturate",
+    ),
+)
+_Q = QUADROTOR.index
 
 
 class QuadrotorParams:
@@ -119,20 +149,35 @@ class QuadrotorParams:
         self.hover_thrust = self.mass * self.g / 4.0
         self.hover_speed = math.sqrt(self.hover_thrust / self.k_f)
         alpha = 1.0 if self.tau == 0 else -math.expm1(-self.h / self.tau)
-        v = np.empty(_NPARAM)
-        v[_M], v[_G] = self.mass, self.g
-        v[_JX], v[_JY], v[_JZ] = self.inertia
-        v[_D], v[_KAPPA], v[_KF] = self.d, self.kappa, self.k_f
-        v[_TMIN], v[_TMAX], v[_ALPHA], v[_KD] = self.t_min, self.t_max, alpha, self.drag
-        v[_KRX], v[_KRY], v[_KRZ] = self.k_R
-        v[_KWX], v[_KWY], v[_KWZ] = self.k_w
-        v[_AMAX], v[_TANTILT] = self.accel_limit, math.tan(self.tilt_limit)
-        v[_FZMIN] = 0.1 * self.mass * self.g
-        v[_CPSI], v[_SPSI] = math.cos(self.yaw), math.sin(self.yaw)
-        v[_COSCRASH], v[_GROUND] = math.cos(self.crash_tilt), self.ground
         self.desaturate = cfg.quad_mixer == "desaturate"
-        v[_DESAT] = float(self.desaturate)
-        self.vector = v
+        self.vector = QUADROTOR.pack(
+            mass=self.mass,
+            gravity=self.g,
+            inertia_x=self.inertia[0],
+            inertia_y=self.inertia[1],
+            inertia_z=self.inertia[2],
+            rotor_offset=self.d,
+            kappa=self.kappa,
+            thrust_coeff=self.k_f,
+            thrust_min=self.t_min,
+            thrust_max=self.t_max,
+            motor_alpha=alpha,
+            drag=self.drag,
+            k_R_x=self.k_R[0],
+            k_R_y=self.k_R[1],
+            k_R_z=self.k_R[2],
+            k_w_x=self.k_w[0],
+            k_w_y=self.k_w[1],
+            k_w_z=self.k_w[2],
+            accel_limit=self.accel_limit,
+            tan_tilt_limit=math.tan(self.tilt_limit),
+            thrust_floor=0.1 * self.mass * self.g,
+            cos_yaw=math.cos(self.yaw),
+            sin_yaw=math.sin(self.yaw),
+            cos_crash_tilt=math.cos(self.crash_tilt),
+            ground_altitude=self.ground,
+            desaturate=float(self.desaturate),
+        )
 
     def mix(self, f: np.ndarray, M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The mixer of the kernel over arrays: rotor thrusts (..., 4) (N) and a saturation
@@ -346,13 +391,31 @@ def _rotate(R, w, tau, gyro, h, J):
 @njit(cache=True, inline="always")
 def _constants(prm):
     """The kernel's constants, unpacked once per call from the parameter vector."""
-    J = (prm[_JX], prm[_JY], prm[_JZ])
-    KR = (prm[_KRX], prm[_KRY], prm[_KRZ])
-    KW = (prm[_KWX], prm[_KWY], prm[_KWZ])
-    body = (prm[_M], prm[_G], prm[_KD], 1.0 / prm[_M], J, KR, KW)
-    rotors = (prm[_D], prm[_KAPPA], prm[_KF], prm[_ALPHA], 0.25 / prm[_D], 0.25 / prm[_KAPPA])
-    limits = (prm[_TMIN], prm[_TMAX], prm[_DESAT] != 0.0, prm[_FZMIN], prm[_TANTILT])
-    heading_crash = (prm[_CPSI], prm[_SPSI], prm[_COSCRASH], prm[_GROUND])
+    J = (prm[_Q.inertia_x], prm[_Q.inertia_y], prm[_Q.inertia_z])
+    KR = (prm[_Q.k_R_x], prm[_Q.k_R_y], prm[_Q.k_R_z])
+    KW = (prm[_Q.k_w_x], prm[_Q.k_w_y], prm[_Q.k_w_z])
+    body = (prm[_Q.mass], prm[_Q.gravity], prm[_Q.drag], 1.0 / prm[_Q.mass], J, KR, KW)
+    rotors = (
+        prm[_Q.rotor_offset],
+        prm[_Q.kappa],
+        prm[_Q.thrust_coeff],
+        prm[_Q.motor_alpha],
+        0.25 / prm[_Q.rotor_offset],
+        0.25 / prm[_Q.kappa],
+    )
+    limits = (
+        prm[_Q.thrust_min],
+        prm[_Q.thrust_max],
+        prm[_Q.desaturate] != 0.0,
+        prm[_Q.thrust_floor],
+        prm[_Q.tan_tilt_limit],
+    )
+    heading_crash = (
+        prm[_Q.cos_yaw],
+        prm[_Q.sin_yaw],
+        prm[_Q.cos_crash_tilt],
+        prm[_Q.ground_altitude],
+    )
     return body, rotors, limits, heading_crash
 
 
@@ -414,7 +477,9 @@ def _quadrotor_kernel(
             crashed_now[b, n] = False
             if crashed[b, n]:
                 continue
-            a, cut, ok = _limit_command(a_des[b, n, 0], a_des[b, n, 1], a_des[b, n, 2], prm[_AMAX])
+            a, cut, ok = _limit_command(
+                a_des[b, n, 0], a_des[b, n, 1], a_des[b, n, 2], prm[_Q.accel_limit]
+            )
             if not ok:  # a non-finite command crashes the UAV
                 _stop(b, n, p, w, rotor, crashed, crashed_now)
                 continue

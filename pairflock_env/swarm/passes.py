@@ -20,8 +20,9 @@ from __future__ import annotations
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig
-from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pass
+from pairflock_env.swarm.flocking import flocking_params, flocking_pass
 from pairflock_env.swarm.grid import NeighborGrid
+from pairflock_env.swarm.pair_pass import pair_pass
 from pairflock_env.task.pairing import agent_pair_state
 
 __all__ = ["NeighborPass", "make_grid"]
@@ -52,7 +53,7 @@ class NeighborPass:
     def __init__(self, cfg: PairFlockConfig, num_swarms: int) -> None:
         pairs = np.asarray(cfg.pairs, dtype=np.int64)  # (P, 2)
         self.cfg = cfg
-        self.params = FlockingParams(cfg)
+        self.params = flocking_params(cfg)
         self.agent_uavs = pairs.reshape(-1).copy()
         self.partner_uavs = pairs[:, ::-1].reshape(-1).copy()
         self.agent_pair = np.repeat(np.arange(len(pairs)), 2)
