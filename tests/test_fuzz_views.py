@@ -373,3 +373,28 @@ def test_render_before_reset_raises_and_without_a_render_mode_warns(kind):
         else:
             with pytest.warns(UserWarning, match="render_mode"):
                 assert plain.render() is None
+
+
+@pytest.mark.parametrize("kind", VIEWS)
+def test_reset_options_take_the_actions_check(kind):
+    """Issue 28, 8(a): positions / velocities given as numeric strings, bools, complex
+    numbers or masked entries are refused in every view, as the same forms are as actions
+    (one check of real arrays: pairflock_env.config.arrays.real_array); the env is unchanged."""
+    env = make_view(kind)
+    reset_view(env, kind, seed=0)
+    before = snapshot(env)
+    N, D = N_UAVS, DIM
+    good = np.random.default_rng(0).uniform(-30, 30, (N, D))
+    bad = [
+        (good.astype(str), TypeError),
+        (good > 0, TypeError),
+        (good + 0j, TypeError),
+        (np.ma.masked_array(good, mask=np.eye(N, D, dtype=bool)), ValueError),
+        (np.ma.masked_array(good, mask=True), ValueError),
+    ]
+    for value, exc in bad:
+        for key in ("positions", "velocities"):
+            with pytest.raises(exc, match=key):
+                reset_view(env, kind, seed=None, options={key: value})
+    assert snapshot(env) == before
+    reset_view(env, kind, seed=0, options={"positions": good})  # the same values as floats
