@@ -398,3 +398,18 @@ def test_reset_options_take_the_actions_check(kind):
                 reset_view(env, kind, seed=None, options={key: value})
     assert snapshot(env) == before
     reset_view(env, kind, seed=0, options={"positions": good})  # the same values as floats
+
+
+@pytest.mark.parametrize("kind", ["vector", "sb3"])
+def test_a_numpy_array_of_seeds_is_a_list_of_seeds(kind):
+    """Issue 28, 8: the batched views take a 1-D numpy array of seeds as they take a list."""
+    a, b = make_view(kind), make_view(kind)
+    if kind == "sb3":
+        a.seed([3, 7]), b.seed(np.array([3, 7]))
+        obs_a, obs_b = a.reset(), b.reset()
+    else:
+        obs_a, _ = a.reset(seed=[3, 7])
+        obs_b, _ = b.reset(seed=np.array([3, 7], dtype=np.int64))
+    np.testing.assert_array_equal(obs_a, obs_b)
+    with pytest.raises(ValueError, match="seed"):
+        reset_view(a, kind, seed=np.array([3, -7]))
