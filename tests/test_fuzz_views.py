@@ -11,18 +11,17 @@ Examples are derandomized (reproducible on CI), 50 per view and property (about 
 
 from __future__ import annotations
 
+import copy
 import math
 import warnings
 from typing import Any
 
 import numpy as np
 import pytest
-
-hypothesis = pytest.importorskip("hypothesis")
-from hypothesis import HealthCheck, given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
-from hypothesis.extra import numpy as hnp  # noqa: E402
-from view_helpers import (  # noqa: E402
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+from view_helpers import (
     VIEWS,
     make_view,
     reset_view,
@@ -30,6 +29,8 @@ from view_helpers import (  # noqa: E402
     step_view,
     zero_action,
 )
+
+from pairflock_env.seeding import check_seed, offset_seeds, swarm_generators
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning", "ignore::DeprecationWarning")
 
@@ -304,9 +305,6 @@ def test_seed_types_are_treated_alike_in_every_view(kind):
 def test_one_seed_rule_keeps_numpys_spawn_semantics():
     """seeding.swarm_generators gives what SeedSequence(seed).spawn(n) gave (bit-identical
     results), without advancing a SeedSequence passed in."""
-    import copy
-
-    from pairflock_env.seeding import check_seed, offset_seeds, swarm_generators
 
     for seed in (0, 5, np.int64(7), 2**70, np.random.SeedSequence(3)):
         ref_ss = copy.deepcopy(seed) if isinstance(seed, np.random.SeedSequence) else None

@@ -10,7 +10,7 @@ import pytest
 from baselines import make_pair_policy
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.safety import SafetyFilter, SafetyParams
-from pairflock_env.safety.cbf.kernels import BARRIER, _far_radius, _far_terms
+from pairflock_env.safety.cbf.kernels import BARRIER, _far_radius, _far_terms, _with_partner
 from pairflock_env.swarm.grid import NeighborGrid
 
 
@@ -172,7 +172,6 @@ def test_the_grid_is_really_consulted():
     ],
 )
 def test_partner_is_merged_at_its_index(hits, mate, expected):
-    from pairflock_env.safety.cbf.kernels import _with_partner
 
     buf = np.full(len(hits) + 1, -7, np.int64)
     buf[: len(hits)] = hits
