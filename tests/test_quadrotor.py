@@ -21,8 +21,8 @@ from baselines.quadrotor_invariants import (
     step_response,
 )
 from pairflock_env import PairFlockCore, make_config, parallel_env
-from pairflock_env.dynamics import quadrotor as Q
 from pairflock_env.dynamics.quadrotor import QuadrotorModel
+from pairflock_env.dynamics.quadrotor import kernels as Q
 from pairflock_env.math3d import (
     euler_zyx,
     hat,

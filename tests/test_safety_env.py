@@ -15,7 +15,6 @@ from baselines.controllers import make_pair_policy
 from baselines.experiments.benchmark.cli import build_parser, resolve
 from baselines.reporting.safety_figure import closest_pass_figure, read_rows
 from pairflock_env import AGENT_INFO_KEYS, PairFlockConfig, PairFlockCore, make_config
-from pairflock_env.config.sections.quadrotor import REACTION_CYCLES as QUAD_REACTION_CYCLES
 from pairflock_env.config.sections.safety import (
     BOUND_OTHER_SHARE as QUAD_OTHER_SHARE,
 )
@@ -25,6 +24,7 @@ from pairflock_env.config.sections.safety import (
     OTHER_SHARE,
 )
 from pairflock_env.dynamics import VEHICLES
+from pairflock_env.dynamics.quadrotor.section import REACTION_CYCLES as QUAD_REACTION_CYCLES
 from pairflock_env.safety import SafetyParams
 from pairflock_env.safety.stage import SAFETY_INFO_KEYS
 
