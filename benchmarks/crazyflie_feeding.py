@@ -6,7 +6,7 @@ feeding decisions of docs/crazyflie.md (no optional package needed).
 
 Studies (each prints a markdown table):
 
-* ``hover``: a_des = 0 for 30 s with both references, every parameter set: the thrust the
+* ``hover``: a_des = 0 for 30 s with three references, every parameter set: the thrust the
   firmware's feed-forward asks for relative to the weight, altitude at 2 s and 30 s;
 * ``tracking``: one Crazyflie under a PD law (the pinning gains 0.5, 1.414) tracking a circle
   of radius 1 m at 1 and 2 m/s; RMS tracking error and mean altitude error over [10, 30] s;
@@ -47,13 +47,21 @@ def crazyflies(n: int, z: float = 1.0, **kw):
     return m, q, p
 
 
+#: the references compared: the default leash, the crazyflie preset's, the anchored one
+REFERENCES = {
+    "integrated (leash 0.1 m, 0.3 m/s)": {},
+    "integrated, leash 0.1 m, 0.1 m/s": dict(crazyflie_leash_velocity=0.1),
+    "anchored": dict(crazyflie_reference="anchored"),
+}
+
+
 def hover() -> None:
     print("| model | reference | feed-forward / weight | z at 2 s | z at 30 s |")
     print("|---|---|---|---|---|")
     for name, a in CRAZYFLIE_MODELS.items():
         scale = 4 * a["thrust_max"] * FIRMWARE["mass_thrust"] / FIRMWARE["pwm_max"]
-        for ref in ("integrated", "anchored"):
-            m, q, p = crazyflies(1, crazyflie_model=name, crazyflie_reference=ref)
+        for ref, kw in REFERENCES.items():
+            m, q, p = crazyflies(1, crazyflie_model=name, **kw)
             z = []
             for _ in range(1500):
                 m.advance(q, p, np.zeros_like(q))
@@ -96,6 +104,7 @@ FEEDINGS = {
     ),
     "integrated, leash 0.5 m / 1.0 m/s": dict(crazyflie_leash=0.5, crazyflie_leash_velocity=1.0),
     "integrated, leash 0.1 m / 0.3 m/s (default)": {},
+    "integrated, leash 0.1 m / 0.1 m/s": dict(crazyflie_leash_velocity=0.1),
     "integrated, default, 500 Hz": dict(crazyflie_setpoint_rate=500.0),
 }
 MODELS = ("cf2x_L250", "cf2x_T350", "cf21B_500")
@@ -114,10 +123,10 @@ def chatter() -> None:
     rng = np.random.default_rng(0)
     print("| reference | A (m/s^2) | pattern | crashed / 20 | max tilt (deg) | lowest z (m) |")
     print("|---|---|---|---|---|---|")
-    for ref in ("anchored", "integrated"):
+    for ref, kw in REFERENCES.items():
         for amp in (2.0, 3.0, 5.0):
             for pattern in ("switch", "random"):
-                m, q, p = crazyflies(20, z=10.0, crazyflie_reference=ref)
+                m, q, p = crazyflies(20, z=10.0, **kw)
                 tilt, zmin = 0.0, 10.0
                 for k in range(500):
                     if pattern == "switch":
