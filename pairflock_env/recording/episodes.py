@@ -76,18 +76,19 @@ def _check_name(name: Any) -> str:
     return name
 
 
-def _check_folder(folder: Any) -> str:
+def _check_folder(folder: Any, allow_existing: bool) -> str:
     if not isinstance(folder, (str, os.PathLike)):
         raise TypeError(f"path={folder!r}: expected a str or os.PathLike folder name")
     folder = os.fspath(folder)
     if os.path.exists(folder) and not os.path.isdir(folder):
         raise ValueError(f"path={folder!r} is a file; expected a folder for the recordings")
-    if os.path.isdir(folder):
+    if os.path.isdir(folder) and not allow_existing:
         old = sorted(e for e in os.listdir(folder) if e.endswith(".pfrec"))
         if old:
             raise ValueError(
                 f"path={folder!r} already holds recordings ({', '.join(old[:3])}"
-                f"{', ...' if len(old) > 3 else ''}); expected a new folder or one without any"
+                f"{', ...' if len(old) > 3 else ''}); expected a new folder or one without any "
+                "(or allow_existing=True)"
             )
     return folder
 
@@ -96,7 +97,9 @@ class CoreRecorder:
     """Writes one recording per swarm and episode of a core (see the module docstring).
 
     Args:
-        path: the folder of the recordings (created if missing; must hold no ``.pfrec`` yet).
+        path: the folder of the recordings (created if missing; must hold no ``.pfrec`` yet
+            unless ``allow_existing``: several recorders filling one folder, with names
+            that differ, e.g. one per seed).
         controller: the name of what chose the pair actions (``"smc"``, ``"sb3:..."``).
         every: record one core step in ``every`` (the last step of an episode always).
         swarms: the swarms to record (default: all).
@@ -129,8 +132,9 @@ class CoreRecorder:
         flush_seconds: float = 2.0,
         fsync: bool = False,
         metadata: Mapping[str, Any] | None = None,
+        allow_existing: bool = False,
     ) -> None:
-        self.folder = _check_folder(path)
+        self.folder = _check_folder(path, bool(allow_existing))
         if controller is not None and not isinstance(controller, str):
             raise TypeError(f"controller={controller!r}: expected a str (its name) or None")
         self.controller = controller
