@@ -11,7 +11,7 @@ import pytest
 from view_helpers import VIEWS, make_view, reset_view, step_view
 
 from baselines.controllers import make_pair_policy
-from pairflock_env import PairFlockCore, make_config
+from pairflock_env import PairFlockCore, make_config, parallel_env
 from pairflock_env.dynamics import VEHICLES, make_vehicle
 from pairflock_env.dynamics.crazyflie import CRAZYFLIE_MODELS, CrazyflieModel, quat_xyzw
 from pairflock_env.dynamics.crazyflie.section import hover_rotor_time_constant, reaction_time
@@ -318,3 +318,39 @@ def test_every_view_flies_the_controllers_with_the_filter(kind, controller):
     assert np.isfinite(core.q).all() and not core.vehicle.crashed.any()
     assert core.t.max() > 0.05
     env.close()
+
+
+# --------------------------------------------------------------------------- preset
+@pytest.mark.parametrize("controller", ["smc", "proportional", "braking"])
+@pytest.mark.parametrize("mode", ["none", "cbf"])
+def test_the_crazyflie_preset_flies_every_controller(controller, mode):
+    """20 s of the preset, two seeds: nobody crashes, the swarm stays in its 6 m x 6 m x 2.6 m
+    arena, the pair closes in on d_m, and with the filter on it keeps safety_distance."""
+    cfg = make_config("crazyflie", safety_filter=mode, horizon=20.0)
+    core = PairFlockCore(cfg, num_swarms=2)
+    pol = make_pair_policy(controller, cfg)
+    res = core.reset(seed=[100, 101])
+    closest, lo, hi = np.inf, np.full(3, np.inf), np.full(3, -np.inf)
+    for _ in range(cfg.episode_steps):
+        a, _ = pol.predict(res.obs.reshape(4, -1))
+        res = core.step(a.reshape(2, 2, -1))
+        d = np.linalg.norm(core.q[:, :2, None] - core.q[:, None], axis=-1)
+        d[:, 0, 0] = d[:, 1, 1] = np.inf
+        closest = min(closest, float(d.min()))
+        lo, hi = np.minimum(lo, core.q.min(axis=(0, 1))), np.maximum(hi, core.q.max(axis=(0, 1)))
+    assert not core.vehicle.crashed.any() and core.vehicle.tilt().max() < 30.0
+    assert lo[:2].min() >= -3.0 - 1e-9 and hi[:2].max() <= 3.0 + 1e-9
+    assert lo[2] > 0.6 and hi[2] < 2.6
+    pair = np.linalg.norm(core.q[:, 0] - core.q[:, 1], axis=-1)
+    assert np.abs(pair - cfg.d_m[0]).max() < 0.25
+    if mode == "cbf":
+        assert closest >= cfg.safety_distance
+
+
+def test_parallel_env_runs_the_preset():
+    env = parallel_env(preset="crazyflie", max_cycles=50)
+    obs, _ = env.reset(seed=0)
+    pol = make_pair_policy("smc", env)
+    while env.agents:
+        obs, _, _, _, infos = env.step({a: pol.predict(o)[0] for a, o in obs.items()})
+    assert env.core.vehicle.name == "crazyflie" and not infos["uav_0"]["crashed"]
