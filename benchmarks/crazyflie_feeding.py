@@ -112,11 +112,12 @@ MODELS = ("cf2x_L250", "cf2x_T350", "cf21B_500")
 
 def tracking() -> None:
     for speed in (1.0, 2.0):
-        print(f"\n{speed:g} m/s circle: tracking RMS (m) / mean altitude error (m)\n")
+        print(f"{speed:g} m/s circle: tracking RMS (m) / mean altitude error (m)\n")
         print("| feeding | " + " | ".join(MODELS) + " |\n|---|" + "---|" * len(MODELS))
         for name, kw in FEEDINGS.items():
             cells = [track(speed, crazyflie_model=mod, **kw)[1:] for mod in MODELS]
             print(f"| {name} | " + " | ".join(f"{e:.3f} / {z:+.3f}" for e, z in cells) + " |")
+        print()
 
 
 def chatter() -> None:
@@ -143,8 +144,8 @@ def chatter() -> None:
 
 
 def physics() -> None:
-    print("| model | 500 Hz | 1 kHz | 2.5 kHz |  (largest distance to the 10 kHz run, m)")
-    print("|---|---|---|---|")
+    print("Largest distance to the 10 kHz plant over 10 s on the 2 m/s circle (m)\n")
+    print("| model | 500 Hz | 1 kHz | 2.5 kHz |\n|---|---|---|---|")
     for model in CRAZYFLIE_MODELS:
         ref = track(2.0, 10.0, crazyflie_model=model, substeps=200)[0]
         runs = [track(2.0, 10.0, crazyflie_model=model, substeps=s)[0] for s in (10, 20, 50)]
