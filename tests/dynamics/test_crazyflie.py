@@ -303,6 +303,8 @@ def _act(env, kind, pol, obs):
 @pytest.mark.parametrize("kind", VIEWS)
 @pytest.mark.parametrize("controller", ["smc", "proportional", "braking"])
 def test_every_view_flies_the_controllers_with_the_filter(kind, controller):
+    if kind == "sb3":
+        pytest.importorskip("stable_baselines3", reason="the SB3 view needs the train extra")
     kw = dict(dynamics="crazyflie", n_uavs=6, safety_filter="cbf", max_cycles=25)
     if kind in ("gym", "vector", "sb3"):
         kw["interface"] = "world"  # the controllers read the physical observation
