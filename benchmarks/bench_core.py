@@ -17,7 +17,7 @@ Everything runs on one thread (numba kernels are single-threaded; OMP/MKL pinned
 
 from __future__ import annotations
 
-from baselines.evaluation.parallel import pin_threads
+from baselines.runtime.threads import pin_threads
 
 pin_threads()  # one thread for OpenMP/MKL/OpenBLAS/numba, before numpy loads
 

@@ -14,7 +14,7 @@ numpy is imported (nothing here imports torch).
 
 from __future__ import annotations
 
-from baselines.evaluation.parallel import pin_threads
+from baselines.runtime.threads import pin_threads
 
 pin_threads()  # one thread for OpenMP/MKL/OpenBLAS/numba, before numpy loads
 

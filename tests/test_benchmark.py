@@ -14,7 +14,7 @@ import pytest
 from baselines import POLICIES
 from baselines.benchmark import main
 from baselines.evaluation.specs import expand_scenarios, parse_policy, parse_scenario, slug
-from baselines.reporting.benchmark_figures import load_traces
+from baselines.experiments.benchmark.figures import load_traces
 
 #: a tiny task: 8 UAVs, 2 s, so that each run is a fraction of a second
 TINY = ["--suite", "quick", "--n-uavs", "8", "--horizon", "2", "--seeds", "2", "--quiet"]
@@ -381,8 +381,8 @@ def test_set_values_are_numbers_as_written():
     """The benchmark's and the quadrotor experiment's --set read ``1e-3``/``5e1`` as numbers
     (the parser every CLI shares, :func:`baselines.evaluation.specs.parse_value`)."""
     from baselines.experiments.benchmark import build_parser, resolve
-    from baselines.experiments.quadrotor_experiment import _settings
-    from baselines.experiments.quadrotor_experiment import build_parser as quad_parser
+    from baselines.experiments.quadrotor.experiment import _settings
+    from baselines.experiments.quadrotor.experiment import build_parser as quad_parser
 
     parser = build_parser()
     args = parser.parse_args([*TINY, "-p", "smc", "--set", "dt=1e-2,5e-3", "--set", "d_m=5e0"])

@@ -35,7 +35,7 @@ def test_action_for_inverts_decode(dim):
 def test_imitation_writes_a_loadable_model_that_follows_its_teacher(tmp_path):
     from baselines import make_pair_policy
     from pairflock_env import parallel_env
-    from train.imitate import imitate
+    from train.imitate.dagger import imitate
 
     rec = imitate(
         "pair_n20_a50", tmp_path / "bc", seed=0, iterations=2, decisions=40, epochs=3,
@@ -53,7 +53,7 @@ def test_imitation_writes_a_loadable_model_that_follows_its_teacher(tmp_path):
 
 
 def test_seed_summary_picks_the_lowest_validation_score():
-    from train.imitate import SEED_METRICS, seed_summary
+    from train.imitate.cli import SEED_METRICS, seed_summary
 
     def rec(seed, score):
         return {"seed": seed, "validation": {k: score + i for i, (k, _) in enumerate(SEED_METRICS)}}
@@ -83,7 +83,7 @@ def test_imitate_cli_help_and_bad_arguments():
 
 
 def test_eval_sets_change_the_validation_only():
-    from train.imitate import _settings
+    from train.imitate.dagger import _settings
 
     s = _settings("pair_safe_a50", 3, [("safety_filter", "none")], [("safety_filter", "cbf")])
     assert s.seed == 3 and s.init_model is None

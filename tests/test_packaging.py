@@ -108,7 +108,8 @@ def test_packaged_names_load_through_the_public_entry_points(tmp_path, monkeypat
     from baselines import make_pair_policy
     from baselines.controllers.sb3 import read_metadata
     from pairflock_env import make_config
-    from train import cli, evaluate
+    from train import cli
+    from train.evaluate import cli as evaluate
 
     monkeypatch.chdir(tmp_path)
     name = config_names()[0]

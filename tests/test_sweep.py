@@ -106,7 +106,7 @@ def local_sweep(tmp_path_factory):
     assert (first / "sweep_trial.json").is_file(), p.stderr.read().decode()[-3000:]
     p.stderr.close()
     before = {n: (first / n).stat().st_mtime_ns for n in ("run.json", "sweep_trial.json")}
-    from train.sweep import main
+    from train.sweep.cli import main
 
     assert main(args) == 0
     return out, before
@@ -179,18 +179,18 @@ def test_help_shows_usage_and_examples():
     assert "examples:" in r.stdout and "ray start --head" in r.stdout
     tomllib = pytest.importorskip("tomllib")
     scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
-    assert scripts["pairflock-sweep"] == "train.sweep:main"
+    assert scripts["pairflock-sweep"] == "train.sweep.__main__:main"
 
 
 def test_dotted_keys_map_onto_run_settings():
-    from train.sweep_plan import SweepPlan, parse_grid
+    from train.sweep.plan import SweepPlan, parse_grid
 
     assert parse_grid("hp.learning_rate=3e-4,1e-4") == ("hp.learning_rate", [3e-4, 1e-4])
     key, vals = parse_grid("hp.policy_kwargs.net_arch=[64,64],[128,128]")
     assert vals == [[64, 64], [128, 128]]
     plan = SweepPlan(
         base={},
-        fixed=[("eval_env.horizon", 5.0), ("frame.w_band", 0.5)],
+        fixed=[("eval_env.horizon", 5.0), ("interface.w_band", 0.5)],
         grid=[("env.n_uavs", [8, 10]), (key, vals), ("num_swarms", [4])],
         seeds=[3, 4],
         total_steps=1000,
@@ -224,7 +224,7 @@ def test_dotted_keys_map_onto_run_settings():
     ],
 )
 def test_bad_sweeps_are_named_before_anything_runs(tmp_path, capsys, args, message):
-    from train.sweep import main
+    from train.sweep.cli import main
 
     with pytest.raises(SystemExit) as e:
         main([*args, "--out", str(tmp_path / "x"), "--quiet"])
@@ -234,7 +234,7 @@ def test_bad_sweeps_are_named_before_anything_runs(tmp_path, capsys, args, messa
 
 
 def test_out_and_resume_are_protected(tmp_path, capsys):
-    from train.sweep import main
+    from train.sweep.cli import main
 
     (tmp_path / "busy").mkdir()
     (tmp_path / "busy" / "file").write_text("x")
@@ -251,8 +251,8 @@ def test_out_and_resume_are_protected(tmp_path, capsys):
 
 
 def test_a_failing_worker_is_reported_and_the_others_go_on(tmp_path):
-    from train.sweep_local import Progress, run_local
-    from train.sweep_plan import SweepPlan
+    from train.sweep.local import Progress, run_local
+    from train.sweep.plan import SweepPlan
 
     plan = SweepPlan(base={}, fixed=[], grid=[], seeds=[0])
     (trial,) = plan.trials()
@@ -268,7 +268,7 @@ def test_a_failing_worker_is_reported_and_the_others_go_on(tmp_path):
 def test_iqm_and_interval_are_rliables_and_reproducible():
     from rliable import metrics
 
-    from train.sweep_stats import iqm_ci
+    from baselines.reporting.stats import iqm_ci
 
     x = np.random.default_rng(5).random((7, 3))
     global_state = np.random.get_state()[1].copy()
@@ -283,7 +283,7 @@ def test_iqm_and_interval_are_rliables_and_reproducible():
 
 
 def test_never_reached_band_is_censored_and_marked():
-    from train.sweep_stats import summary_markdown
+    from train.sweep.report import summary_markdown
 
     def result(seed, band):
         s = dict(
@@ -316,10 +316,10 @@ def test_never_reached_band_is_censored_and_marked():
 def test_a_sweep_of_a_task_mix_reports_the_aggregate_and_every_task(tmp_path):
     """Trials of a multi-task config (train/tasks.py): final evaluation and aims per evaluation
     task plus over every task; the summary has a table per task next to the aggregate."""
-    from train.mix_eval import aggregate_score
-    from train.sweep_plan import SweepPlan
-    from train.sweep_stats import csv_rows, summary_markdown
-    from train.sweep_trial import FINAL_ROWS, run_trial
+    from train.mix.evaluation import aggregate_score
+    from train.sweep.plan import SweepPlan
+    from train.sweep.report import csv_rows, summary_markdown
+    from train.sweep.trial import FINAL_ROWS, run_trial
 
     base = {
         "env": {"n_uavs": 8, "pair_accel_limit": 50.0, "max_cycles": 100},

@@ -79,7 +79,7 @@ def test_learned_keeps_separation_as_an_aim_and_its_score_is_unchanged():
 
 
 def test_eval_targets_setting_is_validated_and_selects_the_score():
-    from train.mix_eval import score_function
+    from train.mix.evaluation import score_function
     from train.settings import RunSettings
 
     with pytest.raises(ValueError, match="eval_targets='strict' is invalid"):
@@ -101,7 +101,7 @@ def test_eval_targets_setting_is_validated_and_selects_the_score():
 def test_sweep_aims_judge_by_the_runs_targets():
     from types import SimpleNamespace
 
-    from train.sweep_trial import aims
+    from train.sweep.trial import aims
 
     cfg = SimpleNamespace(n_uavs=50, init="random")
     rows = [

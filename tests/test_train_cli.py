@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from bench_scripts import load_script
 
 torch = pytest.importorskip("torch")
 pytest.importorskip("stable_baselines3")
@@ -135,9 +136,9 @@ def test_help_documents_every_cli():
         "Ctrl-C",
     ):
         assert flag in out.stdout, flag
-    for mod in ("train.evaluate", "train.throughput"):
+    for cmd in (["-m", "train.evaluate"], ["benchmarks/bench_training.py"]):
         r = subprocess.run(
-            [sys.executable, "-m", mod, "--help"],
+            [sys.executable, *cmd, "--help"],
             cwd=ROOT,
             env=ENV,
             capture_output=True,
@@ -322,7 +323,7 @@ def test_ctrl_c_saves_a_checkpoint_and_exits_cleanly(tmp_path):
         (["--set", "n_uav=20"], "Did you mean 'n_uavs'"),
         (["--hp", "learning_rat=1e-3"], "Did you mean 'learning_rate'"),
         (["--set", "pair_accel_limit=-5"], "pair_accel_limit=-5"),
-        (["--frame-param", "w_error=-1"], "w_error=-1"),
+        (["--interface-param", "w_error=-1"], "w_error=-1"),
         (["--eval-baselines", "smcc"], "eval_baselines entry 'smcc'"),
         (["--hp", "seed=3"], "set by the CLI"),
         (["--hp", "learning_rate=lin_x"], "learning_rate='lin_x' is invalid"),
@@ -357,10 +358,10 @@ def test_resume_refuses_changes_and_out_is_protected(tmp_path, capsys):
 
 
 def test_throughput_script_trains_on_both_routes(tmp_path):
-    """Both routes of ``python -m train.throughput`` build, seed and train (SB3 seeds the env
-    in its constructor, which SuperSuit's ConcatVecEnv no longer supports on its own)."""
+    """Both routes of ``python benchmarks/bench_training.py`` build, seed and train (SB3 seeds
+    the env in its constructor, which SuperSuit's ConcatVecEnv no longer supports on its own)."""
     pytest.importorskip("supersuit")
-    from train.throughput import main
+    main = load_script("bench_training").main
 
     out = tmp_path / "throughput.json"
     assert (
@@ -393,7 +394,7 @@ def test_throughput_script_trains_on_both_routes(tmp_path):
 
 
 def test_linear_schedules_decay_to_zero():
-    from train.run import resolve_schedules
+    from train.hyperparameters import resolve_schedules
 
     hp = resolve_schedules({"learning_rate": "lin_3e-4", "clip_range": 0.2, "n_steps": 8})
     assert hp["learning_rate"](1.0) == 3e-4 and hp["learning_rate"](0.0) == 0.0
@@ -520,7 +521,7 @@ def test_values_are_read_as_written_by_the_train_cli(tmp_path):
 def test_old_interface_names_still_load(tmp_path):
     """``frame``/``frame_params`` (settings files, RunSettings, --frame-param) are the old
     names of ``interface``/``interface_params``; the committed model's metadata loads."""
-    from train.evaluate import _task_overrides
+    from train.evaluate.cli import _task_overrides
     from train.settings import RunSettings, load_yaml, settings_from_sources
 
     old = tmp_path / "old.yaml"
@@ -544,7 +545,7 @@ def test_old_interface_names_still_load(tmp_path):
 def test_evaluate_baselines_take_gains_and_limits(capsys):
     """``train.evaluate --baselines NAME[:GAINS][@LIMIT]``: accepted as the benchmark's
     specs, and a bad name, gain or limit stops the CLI naming the entry."""
-    from train import evaluate
+    from train.evaluate import cli as evaluate
 
     parser = evaluate.build_parser()
     good = ["braking:detour=80", "smc@1000", "braking:k=10,detour=60@40"]

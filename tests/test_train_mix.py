@@ -10,6 +10,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from bench_scripts import load_script
 
 pytest.importorskip("torch")
 pytest.importorskip("stable_baselines3")
@@ -97,7 +98,7 @@ def test_the_cli_names_a_bad_task_of_a_config_file(tmp_path, capsys):
 
 
 def test_tasks_resolve_on_the_shared_env_and_single_task_settings_stay_as_they_were():
-    from train.tasks import evaluation_tasks, training_tasks
+    from train.mix.tasks import evaluation_tasks, training_tasks
 
     s = _settings(eval_env={"horizon": 0.3, "init": "corners"})
     a, b = training_tasks(s)
@@ -116,7 +117,7 @@ def test_tasks_resolve_on_the_shared_env_and_single_task_settings_stay_as_they_w
     assert not {"tasks", "eval_tasks", "eval_aggregate"} & set(one.to_dict())
     assert training_tasks(one) is None and evaluation_tasks(one)[0].name == ""
     from train.callbacks import eval_score
-    from train.mix_eval import score_function
+    from train.mix.evaluation import score_function
 
     assert score_function(one) is eval_score
     # one training task, selected on several
@@ -139,7 +140,7 @@ def _task_env(seed, **cfg):
 
 
 def _mix_and_separate(seed=7):
-    from train.mix_env import TaskMixVecEnv, task_seeds
+    from train.mix.env import TaskMixVecEnv, task_seeds
 
     mix = TaskMixVecEnv([_task_env(0, **TASK_A), _task_env(0, **TASK_B)], ["a", "b"])
     sep = [_task_env(0, **TASK_A), _task_env(0, **TASK_B)]
@@ -203,7 +204,7 @@ def test_attributes_state_and_bad_actions_delegate_by_row_range():
     for x, y in zip(first[:3], again[:3], strict=True):
         assert np.array_equal(x, y)
     other = _task_env(0, **TASK_A)
-    from train.mix_env import TaskMixVecEnv
+    from train.mix.env import TaskMixVecEnv
 
     with pytest.raises(ValueError, match="state of task 1"):
         TaskMixVecEnv([_task_env(0, **TASK_A), other], ["a", "b"]).set_state(state)
@@ -233,7 +234,7 @@ def test_rejected_seeds_and_options_change_no_task_and_name_the_task():
 
 
 def test_each_task_draws_from_its_own_seed_stream():
-    from train.mix_env import TaskMixVecEnv
+    from train.mix.env import TaskMixVecEnv
 
     twins = [dict(n_uavs=6, init="random", num_swarms=2) for _ in range(2)]
     mix = TaskMixVecEnv([_task_env(0, **c) for c in twins])
@@ -269,7 +270,7 @@ def test_best_model_is_chosen_on_the_aggregate_of_the_task_scores(how, best):
     from stable_baselines3.common.logger import Logger
 
     from train.callbacks import EvalCallback
-    from train.mix_eval import score_function
+    from train.mix.evaluation import score_function
 
     s = _settings(eval_tasks=[{"n_uavs": 6, "name": "t0"}, {"n_uavs": 8, "name": "t1"}])
     s.eval_aggregate = how
@@ -294,7 +295,7 @@ def test_best_model_is_chosen_on_the_aggregate_of_the_task_scores(how, best):
 def test_summary_per_task_and_worst_task_aggregate():
     from baselines.reporting.criteria import learned_score
     from train.callbacks import summarize_metrics
-    from train.mix_eval import summarize_tasks
+    from train.mix.evaluation import summarize_tasks
 
     def row(err, band, sep):
         keys = ("ss_mean_error", "ss_max_error", "band_time", "min_pair_separation", "peak_accel")
@@ -342,8 +343,8 @@ def test_two_task_training_logs_every_eval_task_and_keeps_the_best(tmp_path):
 
 
 def test_throughput_measures_run_configs_and_estimates_the_run(tmp_path):
-    from train.config_speed import estimate_run_s
-    from train.throughput import main
+    bench = load_script("bench_training")
+    estimate_run_s, main = bench.estimate_run_s, bench.main
 
     cfg = tmp_path / "mix.yaml"
     cfg.write_text(

@@ -40,13 +40,26 @@ import copy
 import dataclasses
 import difflib
 import inspect
+import re
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from baselines.controllers.zoo import find_packaged, packaged_names
+import yaml
+
+from baselines import POLICIES
+from baselines.controllers.zoo import find_packaged, packaged_names, resolve_model
 from baselines.evaluation.specs import parse_assignment
+from pairflock_env import make_config
+from pairflock_env.interfaces import make_interface
+from train.hyperparameters import (
+    ALGOS,
+    DEFAULT_HYPERPARAMETERS,
+    algo_hyperparameters,
+    check_hyperparameters,
+)
+from train.mix.tasks import check_tasks
 
 __all__ = [
     "ALGOS",
@@ -88,50 +101,6 @@ def _renamed(data: Mapping[str, Any], where: str, category: type[Warning] | None
             warnings.warn(f"{where}: {old!r} is deprecated; write {new!r}", category, stacklevel=3)
         out[new] = out.pop(old)
     return out
-
-
-ALGOS = ("ppo", "sac", "td3")
-
-#: defaults per algorithm (SB3 keyword arguments); ``action_noise_std`` (TD3) is ours
-DEFAULT_HYPERPARAMETERS: dict[str, dict[str, Any]] = {
-    "ppo": {
-        "learning_rate": 3e-4,
-        "n_steps": 128,
-        "batch_size": 2048,
-        "n_epochs": 5,
-        "gamma": 0.98,
-        "gae_lambda": 0.95,
-        "clip_range": 0.2,
-        "ent_coef": 0.0,
-        "vf_coef": 0.5,
-        "max_grad_norm": 0.5,
-        "policy_kwargs": {"net_arch": [128, 128], "log_std_init": -1.0},
-    },
-    "sac": {
-        "learning_rate": 3e-4,
-        "buffer_size": 1_000_000,
-        "learning_starts": 10_000,
-        "batch_size": 256,
-        "tau": 0.005,
-        "gamma": 0.99,
-        "train_freq": 1,
-        "gradient_steps": 1,
-        "ent_coef": "auto",
-        "policy_kwargs": {"net_arch": [256, 256]},
-    },
-    "td3": {
-        "learning_rate": 1e-3,
-        "buffer_size": 1_000_000,
-        "learning_starts": 10_000,
-        "batch_size": 256,
-        "tau": 0.005,
-        "gamma": 0.99,
-        "train_freq": 1,
-        "gradient_steps": 1,
-        "action_noise_std": 0.1,
-        "policy_kwargs": {"net_arch": [256, 256]},
-    },
-}
 
 
 @dataclasses.dataclass
@@ -216,13 +185,8 @@ class RunSettings:
         return out
 
     def algo_hyperparameters(self) -> dict[str, Any]:
-        hp = copy.deepcopy(DEFAULT_HYPERPARAMETERS[self.algo])
-        for k, v in self.hyperparameters.items():
-            if k == "policy_kwargs" and isinstance(v, Mapping):
-                hp.setdefault("policy_kwargs", {}).update(v)
-            else:
-                hp[k] = v
-        return hp
+        """The algorithm's defaults with the run's ``hyperparameters`` on top."""
+        return algo_hyperparameters(self.algo, self.hyperparameters)
 
     def to_dict(self) -> dict[str, Any]:
         """A plain dict of the settings; the task-mix fields only when they are set, so that
@@ -235,9 +199,6 @@ class RunSettings:
 
     # ------------------------------------------------------------------ validation
     def validate(self) -> RunSettings:
-        from pairflock_env import make_config
-        from pairflock_env.interfaces import make_interface
-
         if self.algo not in ALGOS:
             raise ValueError(f"algo={self.algo!r} is invalid: must be one of {', '.join(ALGOS)}")
         for name in (
@@ -261,8 +222,6 @@ class RunSettings:
                 f"time_limit={self.time_limit!r} is invalid: must be > 0 minutes or None"
             )
         if self.init_model is not None:
-            from train.model import init_model_path
-
             init_model_path(self.init_model)
         for name in ("env", "eval_env", "interface_params", "hyperparameters"):
             if not isinstance(getattr(self, name), Mapping):
@@ -274,7 +233,6 @@ class RunSettings:
         cfg = make_config(self.preset, **self.config_overrides())
         make_config(self.preset, **self.eval_overrides())
         make_interface(self.interface, cfg, **self.interface_params)
-        from baselines import POLICIES
 
         for b in self.eval_baselines:
             if b not in POLICIES or b.endswith(":"):
@@ -282,14 +240,21 @@ class RunSettings:
                     f"eval_baselines entry {b!r} is invalid: analytic controllers are "
                     f"{', '.join(k for k in POLICIES if not k.endswith(':'))}"
                 )
-        from train.tasks import check_tasks
 
         check_tasks(self)
-        _check_hyperparameters(self.algo, self.algo_hyperparameters())
-        from train.model import resolve_schedules
-
-        resolve_schedules(self.algo_hyperparameters())
+        check_hyperparameters(self.algo, self.algo_hyperparameters())
         return self
+
+
+def init_model_path(value: Any) -> Path:
+    """The model file of the ``init_model`` setting (a zip path or a packaged policy's name);
+    ``TypeError`` / ``ValueError`` naming the setting otherwise."""
+    if not isinstance(value, (str, Path)):
+        raise TypeError(f"init_model={value!r} is invalid: must be a path or a model name")
+    try:
+        return resolve_model(value)
+    except FileNotFoundError as e:
+        raise ValueError(f"init_model={value!r} is invalid: {e}") from None
 
 
 #: fields of a task mix and their defaults (left out of :meth:`RunSettings.to_dict` when unset)
@@ -300,29 +265,6 @@ _MIX_DEFAULTS = {
     "eval_targets": "learned",
     "init_model": None,
 }
-
-
-def _check_hyperparameters(algo: str, hp: Mapping[str, Any]) -> None:
-    import stable_baselines3 as sb3
-
-    cls = getattr(sb3, algo.upper())
-    valid = set(inspect.signature(cls.__init__).parameters) - {"self", "policy", "env"}
-    if algo == "td3":
-        valid.add("action_noise_std")
-    for k in hp:
-        if k not in valid:
-            hint = difflib.get_close_matches(k, sorted(valid), n=3)
-            extra = f" Did you mean {', '.join(map(repr, hint))}?" if hint else ""
-            raise ValueError(
-                f"hyperparameter {k!r} is invalid for {algo.upper()}.{extra} "
-                f"Valid: {', '.join(sorted(valid))}"
-            )
-    for k in ("seed", "device", "tensorboard_log", "verbose"):
-        if k in hp:
-            raise ValueError(
-                f"hyperparameter {k!r} is set by the CLI (use --seed / --out / --quiet), not in "
-                "hyperparameters"
-            )
 
 
 def _wrap_init(cls):
@@ -345,9 +287,6 @@ def _yaml_loader():
     """PyYAML's safe loader reading numbers as a user writes them: YAML 1.1 takes ``1e-3``
     and ``5e1`` (an exponent without a decimal point) for text, YAML 1.2 and Python for
     numbers."""
-    import re
-
-    import yaml
 
     class Loader(yaml.SafeLoader):
         pass
@@ -375,8 +314,6 @@ def load_yaml(path: str | Path) -> dict[str, Any]:
     """A settings mapping from a YAML file or a packaged config's name
     (:func:`resolve_config`); unknown top-level keys raise with suggestions, the old keys
     ``frame``/``frame_params`` load with a deprecation note."""
-    import yaml
-
     path = resolve_config(path)
     with open(path, encoding="utf-8") as f:
         try:
