@@ -154,8 +154,8 @@ def test_stored_model_configs_load_to_the_same_values(tmp_path):
         assert all(now[k] == SCHEMA.fields[k].default for k in set(now) - set(renamed))
         # the run's own task resolution (dynamics key, a task mix's first task) rebuilds it
         from pairflock_env.config.sections import safety
+        from train.mix.tasks import training_tasks
         from train.settings import RunSettings
-        from train.tasks import training_tasks
 
         run = RunSettings.from_dict(meta["settings"])
         tasks = training_tasks(run)

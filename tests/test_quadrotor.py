@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from baselines.quadrotor_invariants import (
+from baselines.experiments.quadrotor.invariants import (
     hover_drift,
     hovering_model,
     orthonormality_over_scenario,
@@ -442,7 +442,7 @@ def test_experiment_cli_writes_table_csv_and_figures(tmp_path):
 
 
 def test_turn_peak_since_filter_is_the_time_from_the_last_filter_action_to_the_peak():
-    from baselines.experiments.quadrotor_runs import scenario_metrics
+    from baselines.experiments.quadrotor.runs import scenario_metrics
 
     t = np.arange(0.0, 65.0, 0.02)
     err = np.where(np.abs(t - 22.0) < 1e-9, 0.9, 0.1)  # the turn peak at 22 s

@@ -294,7 +294,7 @@ def test_benchmark_safety_suite_runs_filter_off_and_on(tmp_path):
     ).stdout
     assert "| smc | ss_mean_error | 1 |" in paired and "| smc | band_time | 1 |" in paired
 
-    from baselines.reporting.safety_figure import closest_pass_figure, read_rows
+    from baselines.experiments.safety.figure import closest_pass_figure, read_rows
 
     fig = closest_pass_figure(read_rows([out]), tmp_path / "closest.png")
     assert fig.stat().st_size > 0

@@ -143,7 +143,7 @@ def test_sb3_wrappers_and_ppo_train_on_native_vecenv():
 def test_sb3_loader_in_the_action_slot(tmp_path):
     """make_pair_policy("sb3:<path>", env) loads a model saved with its interface and acts on
     the env's standard observation; it holds its decision for decision_period steps."""
-    from baselines.sb3_policy import METADATA_KEY
+    from baselines.controllers.sb3 import METADATA_KEY
 
     venv = PairFlockSB3VecEnv(num_swarms=1, **SMALL)
     model = PPO("MlpPolicy", venv, n_steps=8, batch_size=16, n_epochs=1, seed=0, device="cpu")
