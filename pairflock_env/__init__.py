@@ -13,6 +13,7 @@ the SB3 VecEnv with one row per paired UAV is ``pairflock_env.envs.PairFlockSB3V
 """
 
 from pairflock_env.config import PRESETS, PairFlockConfig, make_config, preset_names
+from pairflock_env.config.registry import load_plugins
 from pairflock_env.core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore, StepResult
 from pairflock_env.envs import (
     ENV_ID,
@@ -25,8 +26,7 @@ from pairflock_env.envs import (
     parallel_env,
     raw_env,
 )
-from pairflock_env.envs._base import deprecated_attr
-from pairflock_env.task.observations import ObsField, ObsLayout
+from pairflock_env.task.observations import ObsLayout
 
 # The one place the version is written: pyproject.toml reads it from here at build time.
 __version__ = "0.1.0"
@@ -44,12 +44,7 @@ def _register_gymnasium() -> None:
 
 
 _register_gymnasium()
-
-_DEPRECATED = {"PairFlockVectorEnv": "PairFlockGymVectorEnv"}
-
-
-def __getattr__(name: str):
-    return deprecated_attr(__name__, name, _DEPRECATED, globals())
+load_plugins()
 
 
 __all__ = [
@@ -57,7 +52,6 @@ __all__ = [
     "ENV_ID",
     "PRESETS",
     "SWARM_INFO_KEYS",
-    "ObsField",
     "ObsLayout",
     "PairFlockAECEnv",
     "PairFlockConfig",

@@ -33,14 +33,15 @@ from typing import Any
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig, make_config
+from pairflock_env.config.arrays import real_array
 from pairflock_env.dynamics import make_vehicle
-from pairflock_env.safety.stage import SafetyStage
+from pairflock_env.safety import make_safety_stage
 from pairflock_env.seeding import swarm_generators
 from pairflock_env.swarm.grid import NeighborGrid
 from pairflock_env.swarm.leader import make_leader
 from pairflock_env.swarm.passes import NeighborPass
 from pairflock_env.swarm.placement import check_reset_options, initial_state, pinning_mask
-from pairflock_env.task.actions import check_pair_actions, decode_pair_actions, real_array
+from pairflock_env.task.actions import check_pair_actions, decode_pair_actions
 from pairflock_env.task.delay import PartnerDelayBuffer
 from pairflock_env.task.infos import (
     AGENT_INFO_KEYS,
@@ -49,7 +50,12 @@ from pairflock_env.task.infos import (
     hold_last_finite,
     make_info,
 )
-from pairflock_env.task.observations import ObsLayout, add_sensor_noise, build_observation
+from pairflock_env.task.observations import (
+    OBSERVATIONS,
+    ObservationContext,
+    ObsLayout,
+    add_sensor_noise,
+)
 from pairflock_env.task.rewards import (
     DIVERGENCE_PENALTY,
     episode_end,
@@ -119,7 +125,7 @@ class PairFlockCore:
         self.config = cfg = config
         self.num_swarms = B = int(num_swarms)
         N, D = cfg.n_uavs, cfg.dim
-        self.layout = ObsLayout(D, cfg.obs_neighbors)
+        self.layout = ObsLayout.for_config(cfg)
 
         # the passes of the current state, and the agents' indexing (one definition, there)
         self._neighbors = sw = NeighborPass(cfg, B)
@@ -129,12 +135,14 @@ class PairFlockCore:
         self._leader = make_leader(cfg)
         self.vehicle = make_vehicle(cfg, B)
         # stage 2b (safety_filter); the partner is constrained at any distance
-        self.safety = SafetyStage(cfg, self.agent_uavs, B, self.partner_uavs)
+        self.safety = make_safety_stage(cfg, self.agent_uavs, B, self.partner_uavs)
         self.q = np.zeros((B, N, D))
         self.p = np.zeros((B, N, D))
         self.t = np.zeros(B)
         self.steps = np.zeros(B, np.int64)
         self._pinned = np.zeros((B, N))
+        #: the pair command (B, M, dim), m/s^2, the last step applied (after the safety stage)
+        self.pair_command = np.zeros((B, len(self.agent_uavs), D))
         self._flock_out: dict[str, np.ndarray] | None = None
         M = len(self.agent_uavs)
         self._obs = np.zeros((B, M, self.layout.size), np.float32)
@@ -296,6 +304,7 @@ class PairFlockCore:
         u, clipped = self.decode_actions(a)  # 2. decode: the pair command u, m/s^2
         grid = self.neighbor_grid  # of this state, from the last pass (None: all pairs)
         u = self.safety.apply(self.q, self.p, self._flock_out["acc"], u, grid)  # 2b. safety filter
+        self.pair_command = u
         with np.errstate(**_CHECKED_FP):
             a_des = self._desired_acceleration(u)  # 3. flocking + pair term (+ disturbance)
             self.vehicle.advance(self.q, self.p, a_des)  # 4. the vehicle model tracks a_des
@@ -422,7 +431,21 @@ class PairFlockCore:
             "neighbor_velocities": pp["nbr_vel"],
             "neighbor_mask": pp["nbr_mask"],
         }
-        return build_observation(self.layout, (B, M), fields)
+        if self.config.obs_extra:
+            ctx = ObservationContext(
+                self.config,
+                self.q,
+                self.p,
+                self.t,
+                lq,
+                lp,
+                self.agent_uavs,
+                self.partner_uavs,
+                self._flock_out["acc"],
+            )
+            for name in self.config.obs_extra:
+                fields[name] = OBSERVATIONS[name].value(ctx)
+        return self.layout.fill((B, M), fields)
 
     def observe(self) -> np.ndarray:
         """The current observation (B, M, obs_size), float32 (a copy)."""

@@ -16,8 +16,9 @@ import numpy as np
 import pytest
 
 from pairflock_env import ENV_ID, PairFlockCore, make_config, parallel_env
+from pairflock_env.config.arrays import real_array
 from pairflock_env.envs.vector import PairFlockGymVectorEnv
-from pairflock_env.task.actions import check_pair_actions, decode_pair_actions, real_array
+from pairflock_env.task.actions import check_pair_actions, decode_pair_actions
 
 KW = dict(n_uavs=6, pair_accel_limit=20.0)
 #: the plain actions every form below stands for: signs, zeros and in-range values

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import inspect
 
@@ -99,13 +100,14 @@ def test_config_is_frozen_and_serialisable():
 def test_every_field_is_declared_with_type_unit_range_and_meaning():
     from pairflock_env.config import SCHEMA, field_names
 
-    names = [f.name for f in dataclasses.fields(PairFlockConfig)]
+    cfg = PairFlockConfig()
+    names = [n for n in vars(cfg) if not n.startswith("_")]  # the values a config holds
     assert names == list(field_names()) == list(SCHEMA.fields)
     in_sections = [f.name for sec in SCHEMA.sections for f in sec.fields]
     assert sorted(in_sections) == sorted(names)  # each field in exactly one section
     for f in SCHEMA.fields.values():
         assert f.doc and f.kind.valid() and f.kind.type_name, f.name
-        assert dataclasses.fields(PairFlockConfig)[names.index(f.name)].metadata["declaration"] is f
+        assert PairFlockConfig.schema.fields[f.name] is f
     # the declared defaults are valid: the default config is the paper's
     assert PairFlockConfig() == make_config(None) == make_config("paper").replace(preset=None)
     sig = inspect.signature(PairFlockConfig)
@@ -151,7 +153,9 @@ def test_stored_model_configs_load_to_the_same_values(tmp_path):
         now = cfg.to_dict()
         assert {k: now[k] for k in renamed} == renamed
         # fields added since the model was stored take their defaults (today's behaviour)
-        assert all(now[k] == SCHEMA.fields[k].default for k in set(now) - set(renamed))
+        new = set(now) - set(renamed)
+        assert all(now[k] == PairFlockConfig().to_dict()[k] for k in new)
+        assert all(getattr(cfg, k) == SCHEMA.fields[k].default for k in new)
         # the run's own task resolution (dynamics key, a task mix's first task) rebuilds it
         from pairflock_env.config.sections import safety
         from train.mix.tasks import training_tasks
@@ -251,7 +255,7 @@ def test_unknown_keywords_are_type_errors_everywhere():
         make_interface("pair", cfg, w_eror=1.0)
     with pytest.raises(TypeError, match="Did you mean 'w_error'"):
         PairInterfaceParams(w_eror=1.0)
-    with pytest.raises(TypeError, match="world-frame parameter 'w_error'"):
+    with pytest.raises(TypeError, match="world-interface parameter 'w_error'"):
         make_interface("world", cfg, w_error=1.0)
 
 
@@ -324,7 +328,7 @@ def test_placement_that_cannot_succeed_is_refused_at_construction():
         assert "[with " in str(e.value)
     # as dense as allowed still places (2-D: 0.3, 3-D: 0.15 of the start box)
     from pairflock_env import PairFlockCore
-    from pairflock_env.config.sections.pairs import start_density
+    from pairflock_env.config.sections.initial_state import start_density
 
     cfg = make_config("paper", n_uavs=60, swarm_half_width=18.0, min_init_spacing=3.0)
     assert 0.2 < start_density(cfg) <= 0.3
@@ -333,7 +337,7 @@ def test_placement_that_cannot_succeed_is_refused_at_construction():
 
 
 def test_obs_size_formula_matches_the_layout():
-    from pairflock_env.config.sections.sensing import obs_size
+    from pairflock_env.config.sections.observation import base_obs_size as obs_size
     from pairflock_env.task.observations import ObsLayout
 
     for dim in (2, 3):
@@ -342,42 +346,48 @@ def test_obs_size_formula_matches_the_layout():
 
 
 # ------------------------------------------------------------------ the rename
-def test_safe_distance_is_a_deprecated_alias():
-    import pickle
+def test_old_names_live_only_in_stored_data():
+    """Before the first release no old name is kept as a keyword; the keys that committed
+    model files store (``safe_distance``) load through pairflock_env.compat alone."""
     import warnings
 
+    from pairflock_env.compat import upgrade_stored
+    from pairflock_env.config.fields import UnknownFieldError
     from pairflock_env.interfaces import PairInterfaceParams, interface_from_dict, make_interface
 
-    with pytest.warns(DeprecationWarning, match="safe_distance.*reward_separation_distance"):
-        cfg = make_config("paper", safe_distance=1.5)
-    assert cfg.reward_separation_distance == 1.5 and "safe_distance" not in cfg.to_dict()
-    with pytest.warns(DeprecationWarning):
-        assert cfg.replace(safe_distance=2.0).reward_separation_distance == 2.0
-    with pytest.warns(DeprecationWarning):
-        assert PairFlockConfig(safe_distance=2.0).reward_separation_distance == 2.0
-    with pytest.warns(DeprecationWarning, match="reward_separation_distance"):
-        assert cfg.safe_distance == 1.5
-    with pytest.raises(TypeError, match="give only reward_separation_distance"):
-        make_config("paper", safe_distance=1.0, reward_separation_distance=1.0)
-    # a pickle made before the rename holds the old name
-    old = pickle.loads(pickle.dumps(cfg))
-    state = dict(vars(cfg))
-    state["safe_distance"] = state.pop("reward_separation_distance")
-    old.__setstate__(state)
-    assert old == cfg
-
-    with pytest.warns(DeprecationWarning, match="'safe_distance'.*'separation_distance'"):
-        itf = make_interface("pair", cfg, safe_distance=3.0)
-    assert itf.params.separation_distance == 3.0 and "safe_distance" not in itf.to_dict()
-    with pytest.warns(DeprecationWarning):
-        assert PairInterfaceParams(safe_distance=3.0).separation_distance == 3.0
-    stored = {**itf.to_dict()}
-    stored["safe_distance"] = stored.pop("separation_distance")
+    with pytest.raises(UnknownFieldError, match="'safe_distance'"):
+        make_config("paper", safe_distance=1.5)
+    with pytest.raises(TypeError, match="'safe_distance'"):
+        PairInterfaceParams(safe_distance=3.0)
+    cfg = make_config("paper", reward_separation_distance=1.5)
+    stored = cfg.to_dict()
+    stored["safe_distance"] = stored.pop("reward_separation_distance")
+    itf = make_interface("pair", cfg, separation_distance=3.0)
+    stored_itf = {**itf.to_dict()}
+    stored_itf["safe_distance"] = stored_itf.pop("separation_distance")
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # stored model metadata loads silently
-        again = interface_from_dict(stored, cfg)
-        assert PairFlockConfig.from_dict({**cfg.to_dict()}) == cfg
-    assert again.params == itf.params
+        assert PairFlockConfig.from_dict(stored) == cfg
+        assert interface_from_dict(stored_itf, cfg).params == itf.params
+    with pytest.raises(ValueError, match="both 'safe_distance'"):
+        PairFlockConfig.from_dict({**stored, "reward_separation_distance": 1.5})
+    with pytest.raises(ValueError, match="kind='model'"):
+        upgrade_stored("model", {})
+
+
+def test_an_unpickled_config_is_validated_again():
+    """Issue 28, 8(e): a pickle is data; one holding an invalid value does not load."""
+    import pickle
+
+    cfg = make_config("paper", n_uavs=20)
+    assert pickle.loads(pickle.dumps(cfg)) == cfg
+    tampered = copy.copy(cfg)
+    object.__setattr__(tampered, "dt", -0.01)  # what a pickle written by other code may hold
+    bad = pickle.dumps(tampered)
+    with pytest.raises(ValueError, match=r"^dt=-0.01 is invalid"):
+        pickle.loads(bad)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cfg.dt = 0.02
 
 
 def test_docs_config_md_is_current():

@@ -28,9 +28,10 @@ from hypothesis import strategies as st
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.config import SCHEMA
 from pairflock_env.config.fields import Box, Choice, Flag, Int, Kind, OrNone, Real, Vector
+from pairflock_env.config.registry import Registered, RegisteredNames
 from pairflock_env.config.sections.flocking import Pinning
 from pairflock_env.config.sections.leader import Turns
-from pairflock_env.config.sections.pairs import Pairs, PerPair
+from pairflock_env.config.sections.pair_task import Pairs, PerPair
 from pairflock_env.interfaces import make_interface
 from pairflock_env.interfaces.pair_params import PAIR_INTERFACE_SCHEMA
 
@@ -134,6 +135,11 @@ def strategy_for(kind: Kind, default: Any = None) -> st.SearchStrategy[Any]:
         base = st.sampled_from([True, False, np.bool_(True), 0, 1, "yes"])
     elif isinstance(kind, Choice):
         base = st.one_of(st.sampled_from(kind.options), st.text(max_size=6))
+    elif isinstance(kind, Registered):
+        base = st.one_of(st.sampled_from(list(kind.registry)), st.text(max_size=6), st.none())
+    elif isinstance(kind, RegisteredNames):
+        name = st.one_of(st.sampled_from([*kind.registry, "none"]), st.text(max_size=6))
+        base = st.one_of(name, st.lists(name, max_size=3), st.lists(name, max_size=3).map(tuple))
     elif isinstance(kind, (Vector, Box, PerPair)):
         elem = _reals(kind.elem) if not isinstance(kind, Box) else _reals(Real(0.0, kind.hi))
         if not isinstance(default, tuple):
@@ -363,7 +369,7 @@ def test_memory_and_placement_limits_name_the_field():
     # the placement is linear in N (a neighbour grid, no N x N arrays): the largest swarm
     # allowed, spaced apart, stays within the placement memory limit
     from pairflock_env.config.limits import MAX_PLACEMENT_BYTES, MAX_UAVS
-    from pairflock_env.config.sections.pairs import placement_bytes
+    from pairflock_env.config.sections.initial_state import placement_bytes
 
     largest = make_config("paper", n_uavs=MAX_UAVS)
     assert largest.min_init_spacing > 0

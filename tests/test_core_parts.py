@@ -8,17 +8,20 @@ import numpy as np
 import pytest
 
 from pairflock_env import PairFlockCore, make_config
+from pairflock_env.safety import NoFilterStage
 from pairflock_env.swarm import placement
 from pairflock_env.swarm.placement import initial_state, pinning_mask
 from pairflock_env.task.delay import PartnerDelayBuffer
 from pairflock_env.task.infos import (
     AGENT_INFO_KEYS,
+    FLOCK_INFO_KEYS,
     LIVE_INFO_KEYS,
+    PAIR_INFO_KEYS,
     SWARM_INFO_KEYS,
     hold_last_finite,
     make_info,
 )
-from pairflock_env.task.observations import ObsLayout, build_observation
+from pairflock_env.task.observations import ObsLayout
 from pairflock_env.task.pairing import agent_pair_state, pair_error, sliding_surface
 from pairflock_env.task.rewards import DIVERGENCE_PENALTY, episode_end, reward_terms, total_reward
 
@@ -105,27 +108,27 @@ def test_delay_buffer_needs_a_positive_delay():
 
 
 # --------------------------------------------------------------------------- observation
-def test_build_observation_fills_every_field_by_name():
+def test_the_layout_fills_every_field_by_name():
     lay = ObsLayout(2, 3)
     B, M = 2, 4
     rng = np.random.default_rng(1)
     fields = {f.name: rng.normal(size=(B, M, *f.shape)) for f in lay}
     fields["target_distance"] = np.arange(M, dtype=float)[None, :, None]  # broadcast over B
-    obs = build_observation(lay, (B, M), fields)
+    obs = lay.fill((B, M), fields)
     assert obs.shape == (B, M, lay.size) and obs.dtype == np.float32
     for f in lay:
         want = np.broadcast_to(fields[f.name], (B, M, *f.shape)).astype(np.float32)
         np.testing.assert_array_equal(lay.get(obs, f.name), want)
     del fields["leader_velocity"]
     with pytest.raises(KeyError, match="leader_velocity"):
-        build_observation(lay, (B, M), fields)
+        lay.fill((B, M), fields)
 
 
 def test_layout_without_neighbours_ignores_their_values():
     lay = ObsLayout(2, 0)
     assert "neighbor_offsets" not in lay
     fields = {f.name: np.zeros((1, 2, *f.shape)) for f in ObsLayout(2, 3)}
-    assert build_observation(lay, (1, 2), fields).shape == (1, 2, lay.size)
+    assert lay.fill((1, 2), fields).shape == (1, 2, lay.size)
 
 
 # --------------------------------------------------------------------------- pair state
@@ -146,12 +149,13 @@ def test_agent_pair_state_matches_the_pairing_formulas():
 
 # --------------------------------------------------------------------------- results
 def _info(B=2, M=2, D=2, value=1.0):
-    pair = {k: np.full((B, M), value) for k in AGENT_INFO_KEYS[:5]}
-    flock = {k: np.full(B, value) for k in SWARM_INFO_KEYS[1:5]}
+    pair = {k: np.full((B, M), value) for k in PAIR_INFO_KEYS}
+    flock = {k: np.full(B, value) for k in FLOCK_INFO_KEYS}
     terms = {"error": np.full((B, M), -value)}
     u = np.full((B, M, D), 3.0)
+    safety = NoFilterStage(None, np.arange(M), B).info()
     return make_info(
-        pair, flock, u, np.zeros((B, M), bool), np.full(B, 0.5), np.zeros(B, bool), terms
+        pair, flock, u, np.zeros((B, M), bool), np.full(B, 0.5), np.zeros(B, bool), terms, safety
     )
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pairflock_env import PairFlockCore, make_config, parallel_env
-from pairflock_env.config.sections.pairs import START_HALF_WIDTH, START_UAVS
+from pairflock_env.config.sections.initial_state import START_HALF_WIDTH, START_UAVS
 from pairflock_env.config.sections.swarm import GRID_MIN_UAVS
 from pairflock_env.swarm.placement import pinning_mask
 

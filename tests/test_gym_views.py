@@ -137,8 +137,8 @@ def test_single_env_rejects_bad_input():
         env.reset(seed=-1)
     with pytest.raises(ValueError, match="interface"):
         gym.make(ENV_ID, interface="polar")
-    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="frame"):
-        gym.make(ENV_ID, frame="polar")  # the deprecated alias is named as the caller wrote it
+    with pytest.raises(TypeError, match="'frame'"):
+        gym.make(ENV_ID, frame="pair")  # the old name of interface= is gone
     with pytest.raises(ValueError, match="w_error"):
         gym.make(ENV_ID, interface_params={"w_error": -1.0})
     with pytest.raises(ValueError, match=r"did you mean|Did you mean"):
@@ -231,7 +231,7 @@ def test_interface_encoding_is_bounded_finite_and_symmetric():
     enc = itf.encode(res.obs)
     assert enc.shape == (4, 2, itf.observation_size) and enc.dtype == np.float32
     assert np.isfinite(enc).all() and np.abs(enc).max() <= itf.observation_bound
-    sl = itf.field_slices()
+    sl = {name: itf.features.slice(name) for name in itf.features.names}
     # both members see the same pair error and the same relative velocity in their frames
     np.testing.assert_allclose(enc[:, 0, sl["error"]], enc[:, 1, sl["error"]], atol=1e-6)
     np.testing.assert_allclose(

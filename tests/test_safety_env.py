@@ -10,14 +10,16 @@ from view_helpers import VIEWS, make_view, reset_view, step_view, zero_action
 
 from baselines.controllers import make_pair_policy
 from pairflock_env import AGENT_INFO_KEYS, PairFlockConfig, PairFlockCore, make_config
+from pairflock_env.config.sections.quadrotor import REACTION_CYCLES as QUAD_REACTION_CYCLES
+from pairflock_env.config.sections.safety import (
+    BOUND_OTHER_SHARE as QUAD_OTHER_SHARE,
+)
 from pairflock_env.config.sections.safety import (
     BRAKE_SHARE,
     DECAY,
     OTHER_SHARE,
-    QUAD_DECAY,
-    QUAD_OTHER_SHARE,
-    QUAD_REACTION_CYCLES,
 )
+from pairflock_env.dynamics import VEHICLES
 from pairflock_env.safety import SafetyParams
 from pairflock_env.safety.stage import SAFETY_INFO_KEYS
 
@@ -64,7 +66,7 @@ def test_unset_filter_parameters_follow_the_vehicle():
     assert U * BRAKE_SHARE > L  # so the vehicle's bound is the one that binds here
     assert p.brake_accel == L and p.other_accel == pytest.approx(QUAD_OTHER_SHARE * L)
     assert p.reaction_time == pytest.approx(QUAD_REACTION_CYCLES / q.quad_attitude_freq)
-    assert p.decay == QUAD_DECAY
+    assert p.decay == VEHICLES["quadrotor"].safety_decay
     # what docs/safety.md measured on the quadrotor, to the last bit
     assert (p.brake_accel, p.other_accel, p.reaction_time, p.decay) == (6.0, 2.0, 0.1, 0.1)
     # the attitude loop sets tau: a slower loop (with the physics step it needs) waits longer
@@ -130,17 +132,10 @@ def test_cross_field_rules_are_checked_at_construction():
         make_config("paper", safety_sensing_radius=2.0, safety_distance=2.0)
     with pytest.raises(ValueError, match=r"above safety_distance \+ safety_margin \(1 \+ 1.5 m\)"):
         make_config("paper", safety_sensing_radius=2.0, safety_margin=1.5)
-    # the deprecated lookahead range only extends the sensing radius, with a warning
-    for reach, radius in ((10.0, 100.0), (150.0, 150.0)):
-        with pytest.warns(FutureWarning, match="safety_lookahead_range.*safety_sensing_r"):
-            cfg = make_config("paper", safety_lookahead_range=reach, **CBF)
-        assert SafetyParams.from_config(cfg).sensing_radius == radius
-    with pytest.warns(FutureWarning, match="safety_lookahead_range"):
-        cfg.replace(safety_lookahead_range=120.0)
-    with warnings.catch_warnings():  # a stored config, or None, loads silently
+    with warnings.catch_warnings():  # a stored config loads silently
         warnings.simplefilter("error")
+        cfg = make_config("paper", **CBF)
         assert PairFlockConfig.from_dict(cfg.to_dict()) == cfg
-        make_config("paper", safety_lookahead_range=None)
     # the quadrotor's unset reaction time 1.5 / quad_attitude_freq must fit the field's range
     with pytest.raises(ValueError, match=r"^quad_attitude_freq=0.01 is invalid: .*150 s"):
         make_config("paper-quadrotor", safety_filter="cbf", quad_attitude_freq=0.01)

@@ -4,8 +4,6 @@ and edge cases (docs/safety.md)."""
 
 from __future__ import annotations
 
-import dataclasses
-
 import clarabel
 import numpy as np
 import pytest
@@ -415,7 +413,7 @@ def simulate(
     B, U, T = 48, 100.0, 0.01
     integ = "exact" if exact else "semi_implicit"
     P = SafetyParams(accel_limit=U, sensing_radius=1e3, substeps=S, integrator=integ)
-    P = dataclasses.replace(P, decay=float(rng.uniform(0.1, 1.0)), reaction_time=tau)
+    P = P.replace(decay=float(rng.uniform(0.1, 1.0)), reaction_time=tau)
     N = n_agents + n_obs
     ag = np.arange(n_agents)
     filt = SafetyFilter(P, ag, N)
@@ -564,7 +562,7 @@ def test_skipping_far_uavs_changes_no_command():
     rng = np.random.default_rng(22)
     changed = 0
     for _ in range(150):
-        P = dataclasses.replace(_random_params(rng), sensing_radius=float(rng.uniform(3, 200)))
+        P = _random_params(rng).replace(sensing_radius=float(rng.uniform(3, 200)))
         B, N, D = 3, int(rng.integers(2, 30)), int(rng.integers(2, 4))
         M = min(N, int(rng.integers(1, 4)))
         ag = rng.choice(N, M, replace=False)
@@ -917,7 +915,7 @@ def test_reaction_time_brakes_ahead_of_an_actuation_lag():
         return dmin
 
     lag = 10
-    tau = dataclasses.replace(P, reaction_time=2 * lag * P.dt)
+    tau = P.replace(reaction_time=2 * lag * P.dt)
     assert closest(P, lag) < P.safety_distance
     assert closest(tau, lag) >= P.barrier_distance - 1e-9
     assert min(closest(P, 0), closest(tau, 0)) >= P.barrier_distance - 1e-9
@@ -932,7 +930,7 @@ def test_reaction_time_brakes_ahead_of_an_actuation_lag():
         if v < 0:
             assert _sigma_min(e, v, eps, a, 0.01, c, lam, 0.1)[0] <= H0
     # the sensing radius a closing speed needs grows by V tau
-    T = dataclasses.replace(P, reaction_time=0.1)
+    T = P.replace(reaction_time=0.1)
     assert T.required_sensing_radius(30.0) == pytest.approx(P.required_sensing_radius(30.0) + 3.0)
     for kw, exc in ((dict(reaction_time=-0.1), ValueError), (dict(reaction_time="1"), TypeError)):
         with pytest.raises(exc, match="reaction_time"):

@@ -217,7 +217,7 @@ def test_per_swarm_options_are_all_validated_before_any_swarm_resets():
     np.testing.assert_array_equal(env.core.p[1], np.ones((12, 2)))
 
 
-def test_names_say_what_they_count_and_old_names_still_work():
+def test_names_say_what_they_count_and_old_names_are_gone():
     import pairflock_env
     from pairflock_env.envs import sb3
 
@@ -225,17 +225,9 @@ def test_names_say_what_they_count_and_old_names_still_work():
     assert (env.num_swarms, env.num_rows, env.num_envs, env.agents_per_swarm) == (3, 6, 6, 2)
     vec = pairflock_env.PairFlockGymVectorEnv(num_envs=3, **SMALL)
     assert (vec.num_swarms, vec.num_rows, vec.num_envs) == (3, 3, 3)
-    with pytest.warns(DeprecationWarning, match="PairFlockSB3VecEnv"):
-        assert sb3.PairFlockVecEnv is PairFlockSB3VecEnv
-    with pytest.warns(DeprecationWarning, match="PairFlockSB3VecEnv"):
-        from pairflock_env.envs import PairFlockVecEnv
-    assert PairFlockVecEnv is PairFlockSB3VecEnv
-    with pytest.warns(DeprecationWarning, match="PairFlockGymVectorEnv"):
-        assert pairflock_env.PairFlockVectorEnv is pairflock_env.PairFlockGymVectorEnv
-    with pytest.warns(DeprecationWarning, match="interface="):
-        old = PairFlockSB3VecEnv(num_swarms=1, frame="world", frame_params={}, **SMALL)
-    assert old.interface_name == "world"
-    with pytest.warns(DeprecationWarning), pytest.raises(TypeError, match="not both"):
-        PairFlockSB3VecEnv(interface="pair", frame="world", **SMALL)
-    with pytest.warns(DeprecationWarning, match="interface_name"):
-        assert old.frame == "world"
+    # no deprecated name is kept before the first release (docs/changes.md)
+    for module, old in ((sb3, "PairFlockVecEnv"), (pairflock_env, "PairFlockVectorEnv")):
+        assert not hasattr(module, old)
+    with pytest.raises(TypeError, match="'frame'"):
+        PairFlockSB3VecEnv(num_swarms=1, frame="world", **SMALL)
+    assert PairFlockSB3VecEnv(interface="world", **SMALL).interface_name == "world"

@@ -168,12 +168,12 @@ def rollout(
     _record(tr, core, 0, res, ~done)
     if on_step is not None:
         on_step(0, core, res, ~done)
-    limit = config.pair_accel_limit
     report = _Progress(progress, T)
     # SB3's predict protocol: a policy with memory (a recurrent net, or a learned policy that
     # holds its action over several control steps) gets its state back and the episode starts
     state = None
     episode_start = np.ones(B * M, dtype=bool)
+    filtered = core.config.safety_filter != "none"
     for k in range(1, T + 1):
         obs = res.obs.reshape(B * M, -1)
         actions, state = policy.predict(
@@ -183,11 +183,9 @@ def rollout(
         actions = np.asarray(actions, dtype=np.float64).reshape(B, M, D)
         res = core.step(actions)
         live = ~done
-        if core.safety.enabled:  # the applied command is the filtered one
-            tr.u[live, :, k - 1] = core.safety.output.u[live]
+        tr.u[live, :, k - 1] = core.pair_command[live]  # the applied (filtered) command
+        if filtered:
             _record_safety(tr, res.info, live)
-        else:
-            tr.u[live, :, k - 1] = np.clip(actions[live], -1.0, 1.0) * limit
         tr.clipped_steps[live] += res.info["action_clipped"][live]
         _record(tr, core, k, res, live)
         if on_step is not None:

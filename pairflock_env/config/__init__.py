@@ -24,7 +24,7 @@ penalty, ...) are checked at construction, so an accepted config runs: the docum
 How to add a config field
 -------------------------
 Add one :class:`~.fields.Field` to the section it belongs to in :mod:`.sections`, e.g. in
-``sections/sensing.py``::
+``sections/swarm.py``::
 
     Field("neighbor_search", Choice(("all_pairs", "grid")), "all_pairs", "",
           "How neighbours are found: ...")
@@ -45,7 +45,7 @@ from pairflock_env.config.fields import UnknownFieldError
 from pairflock_env.config.limits import LIMITS
 from pairflock_env.config.model import SCHEMA, ConfigSection, PairFlockConfig, field_names
 from pairflock_env.config.presets import PRESETS, make_config, preset_names
-from pairflock_env.config.sections.pairs import corner_diagonals
+from pairflock_env.config.sections.initial_state import corner_diagonals
 
 __all__ = [
     "LIMITS",

@@ -82,8 +82,6 @@ def _field_rows(
         row = [f"`{f.name}`", f.kind.type_name, f.unit, _default(f)]
         row += [_code(pr[f.name]) if f.name in pr else "" for pr in presets]
         row += [_text(f.kind.valid()), _text(f.doc)]
-        if f.aliases:
-            row[-1] += " Old name: " + ", ".join(f"`{a}`" for a in f.aliases) + " (deprecated)."
         rows.append(row)
     return rows
 

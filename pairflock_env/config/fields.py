@@ -327,11 +327,8 @@ class Auto:
 class Field:
     """One declared field: name, kind (type and valid range), default, unit and meaning.
 
-    ``aliases`` are old names that still work (a ``DeprecationWarning`` for a user keyword,
-    silently when a stored dict is loaded). ``auto`` replaces the default by a value derived
-    from other fields unless the user sets this one. ``deprecated``, when not empty, says
-    why the field should no longer be set: a user keyword giving it a value other than None
-    gets a ``FutureWarning`` with that reason (a stored dict loads silently).
+    ``auto`` replaces the default by a value derived from other fields unless the user sets
+    this one.
     """
 
     name: str
@@ -339,9 +336,7 @@ class Field:
     default: Any
     unit: str
     doc: str
-    aliases: tuple[str, ...] = ()
     auto: Auto | None = None
-    deprecated: str = ""
 
     @property
     def needs(self) -> tuple[str, ...]:

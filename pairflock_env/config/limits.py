@@ -34,6 +34,7 @@ MAX_POSITION = 1e7
 MAX_DISTANCE = 1e5
 MAX_SPEED = 1e4
 MAX_GAIN = 1e6
+MAX_REACTION_TIME = 10.0
 MAX_WEIGHT = 1e6
 MAX_STEP_PENALTY = 1e15
 MAX_DELAY_BYTES = 256 * 2**20
@@ -77,6 +78,12 @@ LIMITS: tuple[Limit, ...] = (
         "of the flocking pass overflows",
     ),
     Limit("MAX_WEIGHT", MAX_WEIGHT, "1", "largest reward weight"),
+    Limit(
+        "MAX_REACTION_TIME",
+        MAX_REACTION_TIME,
+        "s",
+        "largest reaction time of the safety filter, set or derived from the vehicle's lag",
+    ),
     Limit(
         "MAX_STEP_PENALTY",
         MAX_STEP_PENALTY,

@@ -7,10 +7,12 @@ from typing import Any
 
 import numpy as np
 
-from pairflock_env.config.schema import Record, Schema, declare_record
+from pairflock_env.config.registry import FILTERS, LEADERS, OBSERVATIONS, VEHICLES, Plugin
+from pairflock_env.config.schema import Record, Schema, declare_record, refresh_signature
 from pairflock_env.config.sections import DERIVED, RULES, SECTIONS
 from pairflock_env.config.sections.flocking import repulsion_sigma2
-from pairflock_env.config.sections.swarm import episode_steps, physics_dt, uses_grid
+from pairflock_env.config.sections.swarm import uses_grid
+from pairflock_env.config.sections.timing import episode_steps, physics_dt
 
 __all__ = ["SCHEMA", "ConfigSection", "PairFlockConfig", "field_names"]
 
@@ -58,6 +60,8 @@ class ConfigSection(Mapping[str, Any]):
 
 class _PairFlockConfigMethods(Record):
     """Derived quantities and section views of :class:`PairFlockConfig`."""
+
+    stored_as = "config"
 
     @property
     def n_pairs(self) -> int:
@@ -114,7 +118,7 @@ class _PairFlockConfigMethods(Record):
 
 _DOC = """All parameters of one pair-flocking task, in sections (docs/config.md).
 
-A frozen dataclass with one flat field per declared parameter, so that every view
+A frozen record with one flat field per declared parameter, so that every view
 (PettingZoo, Gymnasium, SB3) accepts the same keyword overrides, and ``cfg.n_uavs``,
 ``cfg.quad_mass`` ... read the values. ``cfg.section("flocking")`` groups one section's values.
 The constructor takes keywords only; it validates every field against its declared type and
@@ -126,7 +130,7 @@ given. Values are normalised: vectors are tuples of floats (a scalar broadcast t
 
 Build configs with :func:`make_config` (a preset plus overrides); change one with
 :meth:`replace`; store one with :meth:`to_dict` and load it back with :meth:`from_dict`
-(which also accepts the names of older releases, such as ``safe_distance``).
+(stored dicts of older releases go through :func:`pairflock_env.compat.upgrade_stored`).
 """
 
 PairFlockConfig = declare_record(
@@ -137,3 +141,19 @@ PairFlockConfig = declare_record(
 def field_names() -> tuple[str, ...]:
     """Every field of :class:`PairFlockConfig`, in section order."""
     return tuple(SCHEMA.fields)
+
+
+def _declare(entry: Plugin) -> None:
+    """Declare a registered plug-in's own config section (a built-in one is declared
+    already) and re-derive the order the fields are checked in."""
+    sec = entry.section
+    new = sec is not None and all(s.name != sec.name for s in SCHEMA.sections)
+    if new:
+        SCHEMA.add((sec,), entry.rules, entry.derived)
+        refresh_signature(PairFlockConfig)
+    else:
+        SCHEMA.add()
+
+
+for _registry in (VEHICLES, FILTERS, LEADERS, OBSERVATIONS):
+    _registry.declare = _declare

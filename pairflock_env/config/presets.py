@@ -82,7 +82,7 @@ def make_config(preset: str | None = "paper", **overrides: Any) -> PairFlockConf
         raise invalid("preset", preset, "must be one of " + _choices())
     else:
         base = dict(PRESETS[preset])
-    changed = SCHEMA.resolve(overrides, warn=True)
+    changed = SCHEMA.resolve(overrides)
     values = {**base, "preset": preset, **changed}
     return PairFlockConfig._create(values, tuple(changed))
 

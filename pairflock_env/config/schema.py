@@ -2,17 +2,17 @@
 built from them.
 
 A :class:`Schema` validates a flat mapping of values in one pass: unknown names raise
-:class:`~.fields.UnknownFieldError` with a did-you-mean hint, old names map to new ones, each
-field is checked by its kind in dependency order (auto defaults filled in), and every
-:class:`Rule` between fields and every :class:`Derived` quantity is checked as soon as the
-fields it reads are (so the first error reported is the earliest one). A failing rule names
-the first of its fields that the user set (its first field when the user set none of them),
-the reason and the values of the other fields involved.
+:class:`~.fields.UnknownFieldError` with a did-you-mean hint, each field is checked by its
+kind in dependency order (auto defaults filled in), and every :class:`Rule` between fields and
+every :class:`Derived` quantity is checked as soon as the fields it reads are (so the first
+error reported is the earliest one). A failing rule names the first of its fields that the
+user set (its first field when the user set none of them), the reason and the values of the
+other fields involved.
 
-:func:`declare_record` turns a schema into a frozen dataclass (equality, hashing, repr,
-pickling and ``dataclasses.fields`` as for any dataclass) whose keyword-only constructor runs
-that validation; :class:`Record` holds the shared methods (``replace``, ``to_dict``,
-``from_dict``, deprecated attribute aliases).
+:func:`declare_record` turns a schema into a frozen :class:`Record` class (equality, hashing,
+repr and pickling by the declared fields) whose keyword-only constructor runs that
+validation. One machinery serves every declared parameter set of the project: the env config,
+the learning interface's, the safety filter's and the training run's parameters.
 """
 
 from __future__ import annotations
@@ -21,17 +21,24 @@ import dataclasses
 import difflib
 import inspect
 import math
-import sys
-import warnings
 from collections.abc import Callable, Mapping, Sequence
 from types import SimpleNamespace
 from typing import Any, ClassVar
 
 import numpy as np
 
+from pairflock_env.compat import upgrade_stored
 from pairflock_env.config.fields import Field, UnknownFieldError, fmt_num, show
 
-__all__ = ["Derived", "Record", "Rule", "Schema", "Section", "declare_record"]
+__all__ = [
+    "Derived",
+    "Record",
+    "Rule",
+    "Schema",
+    "Section",
+    "declare_record",
+    "refresh_signature",
+]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -88,15 +95,6 @@ class Derived:
         )
 
 
-def external_stacklevel() -> int:
-    """The ``stacklevel`` that points a warning raised by the caller at the first frame outside
-    this package (the user's code)."""
-    frame, level = sys._getframe(1), 1
-    while frame is not None and frame.f_globals.get("__name__", "").startswith("pairflock_env"):
-        frame, level = frame.f_back, level + 1
-    return level
-
-
 def _dependency_order(fields: Mapping[str, Field]) -> tuple[str, ...]:
     """Declaration order, except that a field comes after every field it needs."""
     done: list[str] = []
@@ -118,6 +116,9 @@ class Schema:
         sections: the sections, in the order of the docs and of ``to_dict``.
         rules, derived: each is checked right after the last of its ``fields`` (so a rule's
             test may read exactly the fields it lists).
+
+    A schema grows by :meth:`add` (a plug-in's section, see ``docs/extending.md``); records
+    built before that keep the fields they had.
     """
 
     def __init__(
@@ -128,29 +129,48 @@ class Schema:
         derived: Sequence[Derived] = (),
     ) -> None:
         self.label = label
-        self.sections = tuple(sections)
+        self.sections: tuple[Section, ...] = ()
+        self.rules: tuple[Rule, ...] = ()
+        self.derived: tuple[Derived, ...] = ()
         self.fields: dict[str, Field] = {}
         self.section_of: dict[str, str] = {}
-        for sec in self.sections:
+        self.add(sections, rules, derived)
+
+    def add(
+        self,
+        sections: Sequence[Section] = (),
+        rules: Sequence[Rule] = (),
+        derived: Sequence[Derived] = (),
+    ) -> None:
+        """Declare more sections, rules and derived quantities (checked like the first ones;
+        ``RuntimeError`` for a field declared twice or a rule over undeclared fields, and the
+        schema is left as it was)."""
+        fields, section_of = dict(self.fields), dict(self.section_of)
+        for sec in sections:
+            if any(s.name == sec.name for s in self.sections):
+                raise RuntimeError(f"section {sec.name!r} is declared twice")
             for f in sec.fields:
-                if f.name in self.fields:
+                if f.name in fields:
                     raise RuntimeError(f"field {f.name!r} is declared twice")
-                self.fields[f.name] = f
-                self.section_of[f.name] = sec.name
-        self.aliases = {a: f.name for f in self.fields.values() for a in f.aliases}
-        self.rules = tuple(rules)
-        self.derived = tuple(derived)
-        for r in (*self.rules, *self.derived):
-            missing = set(r.fields) - set(self.fields)
+                fields[f.name] = f
+                section_of[f.name] = sec.name
+        all_rules = (*self.rules, *rules)
+        all_derived = (*self.derived, *derived)
+        for r in (*rules, *derived):
+            missing = set(r.fields) - set(fields)
             if missing:
                 raise RuntimeError(f"rule {r.doc!r} names undeclared fields {sorted(missing)}")
-        self.order = _dependency_order(self.fields)
+        order = _dependency_order(fields)
         # each rule is checked as soon as the last of its fields is (earliest error first)
-        position = {name: i for i, name in enumerate(self.order)}
-        self._ready: dict[str, list[Rule | Derived]] = {}
-        for r in (*self.rules, *self.derived):
+        position = {name: i for i, name in enumerate(order)}
+        ready: dict[str, list[Rule | Derived]] = {}
+        for r in (*all_rules, *all_derived):
             last = max(r.fields, key=position.__getitem__)
-            self._ready.setdefault(last, []).append(r)
+            ready.setdefault(last, []).append(r)
+        self.sections = (*self.sections, *sections)
+        self.fields, self.section_of = fields, section_of
+        self.rules, self.derived = all_rules, all_derived
+        self.order, self._ready = order, ready
 
     def section(self, name: str) -> Section:
         for sec in self.sections:
@@ -173,36 +193,13 @@ class Schema:
             f"Valid {self.label}s: {', '.join(names)}."
         )
 
-    def resolve(self, values: Mapping[Any, Any], *, warn: bool) -> dict[str, Any]:
-        """``values`` with old names mapped to current ones (a ``DeprecationWarning`` each when
-        ``warn``); ``UnknownFieldError`` for a name that is neither."""
-        out: dict[str, Any] = {}
-        for key, v in values.items():
-            name = self.aliases.get(key, key) if isinstance(key, str) else key
-            if name not in self.fields:
+    def resolve(self, values: Mapping[Any, Any]) -> dict[str, Any]:
+        """``values`` as a dict, after checking that every name is a field
+        (:class:`~.fields.UnknownFieldError` with a did-you-mean hint otherwise)."""
+        for key in values:
+            if key not in self.fields:
                 raise self.unknown(key)
-            if name != key:
-                if name in values:
-                    raise TypeError(
-                        f"{key} and {name} name the same {self.label}; give only {name}"
-                    )
-                if warn:
-                    warnings.warn(
-                        f"{self.label} {key!r} is deprecated; use {name!r} (same meaning)",
-                        DeprecationWarning,
-                        stacklevel=external_stacklevel(),
-                    )
-            why = self.fields[name].deprecated
-            if warn and why and v is not None:
-                # a FutureWarning: its meaning changed, and Python shows it to the users of
-                # the command lines too (a DeprecationWarning from library code it hides)
-                warnings.warn(
-                    f"{self.label} {name!r} is deprecated: {why}",
-                    FutureWarning,
-                    stacklevel=external_stacklevel(),
-                )
-            out[name] = v
-        return out
+        return dict(values)
 
     # ------------------------------------------------------------------ values
     def build(
@@ -251,13 +248,27 @@ def _plain(value: Any) -> Any:
     return value
 
 
+def _restore(cls: type[Record], values: Mapping[str, Any]) -> Record:
+    """Unpickle: rebuild and validate (a pickle is data, and data is checked)."""
+    return cls._create(values, tuple(values))
+
+
 class Record:
-    """Methods shared by the frozen records :func:`declare_record` builds from a schema."""
+    """A frozen, validated record of the fields of a :class:`Schema` (a config, or the
+    parameters of a learning interface, a safety filter or a training run).
+
+    The constructor takes keywords only and validates them; attributes read the values;
+    :meth:`replace` makes a changed copy, :meth:`to_dict` / :meth:`from_dict` store and load
+    one. Equality, hashing and ``repr`` go by the declared fields; assigning to an attribute
+    raises ``dataclasses.FrozenInstanceError``; unpickling validates again.
+    """
 
     schema: ClassVar[Schema]
+    #: the kind of stored mapping :meth:`from_dict` reads (see :mod:`pairflock_env.compat`)
+    stored_as: ClassVar[str | None] = None
 
     def __init__(self, **values: Any) -> None:
-        resolved = self.schema.resolve(values, warn=True)
+        resolved = self.schema.resolve(values)
         self._fill(resolved, tuple(resolved))
 
     def _fill(self, values: Mapping[str, Any], user_set: Sequence[str]) -> None:
@@ -275,79 +286,83 @@ class Record:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> Any:
-        """Rebuild a record from :meth:`to_dict` output, e.g. one stored with a trained model.
-        Old field names are accepted silently; unknown names raise ``TypeError``."""
+        """Rebuild a record from :meth:`to_dict` output, e.g. one stored with a trained model
+        (the keys of older releases are read through
+        :func:`pairflock_env.compat.upgrade_stored`); unknown names raise ``TypeError``."""
         if not isinstance(data, Mapping):
             raise TypeError(f"data={show(data)} is invalid: must be a mapping of field values")
-        values = cls.schema.resolve(data, warn=False)
+        if cls.stored_as is not None:
+            data = upgrade_stored(cls.stored_as, data)
+        values = cls.schema.resolve(data)
         return cls._create(values, tuple(values))
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-Python dict (JSON/YAML friendly: tuples become lists) of every field."""
-        return {name: _plain(getattr(self, name)) for name in self.schema.fields}
+        return {name: _plain(getattr(self, name)) for name in self._names()}
 
     def replace(self, **overrides: Any) -> Any:
         """A copy with some fields changed (validated like the constructor). Fields that were
         derived (``auto``) are derived again, and a vector given as one number follows a
         change of ``dim`` (or ``d_m`` of ``pairs``)."""
-        changed = self.schema.resolve(overrides, warn=True)
-        auto = getattr(self, "_auto_fields", frozenset())
-        values = {
-            name: f.kind.collapse(getattr(self, name))
-            for name, f in self.schema.fields.items()
-            if name not in auto
-        }
+        changed = self.schema.resolve(overrides)
+        values = self._given()
         values.update(changed)
         return self._create(values, tuple(changed))
 
-    def __getattr__(self, name: str) -> Any:
-        # only called when normal lookup fails: deprecated names of fields
-        aliases = type(self).schema.aliases
-        if name in aliases:
-            warnings.warn(
-                f"{type(self).__name__}.{name} is deprecated; use .{aliases[name]} (same value)",
-                DeprecationWarning,
-                stacklevel=external_stacklevel(),
-            )
-            return getattr(self, aliases[name])
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+    def _names(self) -> tuple[str, ...]:
+        """The fields this record holds (a plug-in may declare more after it was built)."""
+        return tuple(n for n in self.schema.fields if n in self.__dict__)
 
-    def __setstate__(self, state: Mapping[str, Any]) -> None:
-        # pickles made before a field was renamed hold the old name
-        state = dict(state)
-        for old, new in type(self).schema.aliases.items():
-            if old in state:
-                state.setdefault(new, state.pop(old))
-        self.__dict__.update(state)
+    def _given(self) -> dict[str, Any]:
+        """The values as a user could have given them (derived ones left out)."""
+        auto = self.__dict__.get("_auto_fields", frozenset())
+        fields = self.schema.fields
+        return {
+            n: fields[n].kind.collapse(getattr(self, n)) for n in self._names() if n not in auto
+        }
+
+    def _key(self) -> tuple[Any, ...]:
+        return tuple((n, getattr(self, n)) for n in self._names())
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return self._key() == other._key()
+
+    def __hash__(self) -> int:
+        return hash(self._key())
+
+    def __repr__(self) -> str:
+        body = ", ".join(f"{n}={getattr(self, n)!r}" for n in self._names())
+        return f"{type(self).__name__}({body})"
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise dataclasses.FrozenInstanceError(f"cannot assign to field {name!r}")
+
+    def __delattr__(self, name: str) -> None:
+        raise dataclasses.FrozenInstanceError(f"cannot delete field {name!r}")
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (_restore, (type(self), self._given()))
 
 
 def declare_record(
     name: str, schema: Schema, base: type[Record], module: str, doc: str
 ) -> type[Record]:
-    """A frozen dataclass named ``name`` with one field per declaration of ``schema``, the
-    methods of ``base`` (a :class:`Record` subclass) and a keyword-only constructor that
-    validates. ``module`` is where users import it from (so that pickles find it)."""
-    spec = [
-        (
-            f.name,
-            f.kind.annotation,
-            dataclasses.field(default=f.default, metadata={"declaration": f}),
-        )
-        for f in schema.fields.values()
-    ]
-    cls = dataclasses.make_dataclass(
-        name,
-        spec,
-        bases=(base,),
-        namespace={"__doc__": doc, "schema": schema},
-        frozen=True,
-        init=False,
-    )
-    cls.__module__ = module
-    cls.__signature__ = inspect.Signature(
+    """A :class:`Record` subclass named ``name`` over ``schema``, with the methods of ``base``
+    and a keyword-only constructor that validates. ``module`` is where users import it from
+    (so that pickles find it)."""
+    cls = type(name, (base,), {"__doc__": doc, "schema": schema, "__module__": module})
+    refresh_signature(cls)
+    return cls
+
+
+def refresh_signature(cls: type[Record]) -> None:
+    """Give ``cls`` the keyword-only signature of its schema's fields (``help()``,
+    ``inspect.signature``); called again when the schema grows."""
+    cls.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
         [
             inspect.Parameter(f.name, inspect.Parameter.KEYWORD_ONLY, default=f.default)
-            for f in schema.fields.values()
+            for f in cls.schema.fields.values()
         ]
     )
-    return cls

@@ -1,27 +1,39 @@
-"""Vehicle models behind the swarm protocol.
+"""Vehicle models behind the swarm protocol, and their registry :data:`VEHICLES`.
 
 Every model takes the same command: a desired acceleration ``a_des`` of shape (B, N, dim),
 held over one control period (zero-order hold), and advances positions ``q`` and velocities
 ``p`` (B, N, dim) in place over ``config.substeps`` physics steps. A model may keep extra state
 (attitude, rotor speeds) of its own and report per-swarm diagnostics through ``info()``.
+
+A vehicle is one :class:`Vehicle` entry, registered with ``VEHICLES.register(...)``; then
+``dynamics="<name>"`` works in every view, controller and command line (docs/extending.md).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
-from pairflock_env.config import PairFlockConfig
+from pairflock_env.config.registry import VEHICLES, Plugin
+from pairflock_env.config.sections import quadrotor as quadrotor_section
 from pairflock_env.dynamics.particle import ParticleModel
 from pairflock_env.dynamics.quadrotor import QuadrotorModel
 
-__all__ = ["VEHICLES", "ParticleModel", "QuadrotorModel", "VehicleModel", "make_vehicle"]
+__all__ = [
+    "VEHICLES",
+    "ParticleModel",
+    "QuadrotorModel",
+    "Vehicle",
+    "VehicleModel",
+    "make_vehicle",
+]
 
 
 class VehicleModel(Protocol):
-    name: str
+    """What the core asks of a vehicle model built as ``model(config, num_swarms)``."""
 
     def reset_rows(self, rows: np.ndarray, q: np.ndarray, p: np.ndarray) -> None:
         """(Re)initialise the model's own state for swarms ``rows`` at positions q, velocities p."""
@@ -32,15 +44,62 @@ class VehicleModel(Protocol):
         ...
 
     def info(self) -> dict[str, np.ndarray]:
-        """Per-swarm diagnostics of the last control period, arrays with leading axis B."""
+        """Diagnostics of the last control period, arrays with leading axis B (per swarm
+        (B,), or per agent (B, M)); the key ``vehicle_terminated`` (B,) bool, if present, ends
+        the episode."""
         ...
 
 
-VEHICLES: dict[str, Callable[[PairFlockConfig, int], VehicleModel]] = {
-    "particle": ParticleModel,
-    "quadrotor": QuadrotorModel,
-}
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Vehicle(Plugin):
+    """A registered vehicle model and what the rest of the env asks about it.
+
+    Attributes (besides :class:`~pairflock_env.config.registry.Plugin`'s name, doc and own
+    config section):
+        model: builds the model, ``model(config, num_swarms) -> VehicleModel``.
+        dims: the spatial dimensions it flies in; the first is ``dim``'s default.
+        substeps: the default of ``substeps`` for a config (None: 1).
+        accel_bound: the acceleration it can realise for a config (m/s^2; None: unbounded);
+            the safety filter's unset braking bounds stay within it.
+        reaction_time: how late it realises a command (s; None: at once); the filter's
+            default reaction time.
+        safety_decay: the filter's default barrier rate on it (None: the filter's own).
+        info_keys: the keys of ``model.info()``.
+    """
+
+    model: Callable[[Any, int], VehicleModel]
+    dims: tuple[int, ...] = (2, 3)
+    substeps: Callable[[Any], int] | None = None
+    accel_bound: Callable[[Any], float] | None = None
+    reaction_time: Callable[[Any], float] | None = None
+    safety_decay: float | None = None
+    info_keys: tuple[str, ...] = ()
 
 
-def make_vehicle(config: PairFlockConfig, num_swarms: int) -> VehicleModel:
-    return VEHICLES[config.dynamics](config, num_swarms)
+def make_vehicle(config: Any, num_swarms: int) -> VehicleModel:
+    """The vehicle model ``config.dynamics`` for ``num_swarms`` swarms."""
+    return VEHICLES[config.dynamics].model(config, num_swarms)
+
+
+VEHICLES.register(
+    Vehicle(
+        name="particle",
+        doc="double integrator q' = p, p' = u (eq. 1)",
+        model=ParticleModel,
+    )
+)
+VEHICLES.register(
+    Vehicle(
+        name="quadrotor",
+        doc="6-DOF rigid body with rotor lag behind a geometric attitude controller "
+        "(docs/quadrotor.md)",
+        section=quadrotor_section.QUADROTOR,
+        model=QuadrotorModel,
+        dims=(3,),
+        substeps=quadrotor_section.min_substeps,
+        accel_bound=quadrotor_section.accel_bound,
+        reaction_time=quadrotor_section.reaction_time,
+        safety_decay=0.1,
+        info_keys=QuadrotorModel.INFO_KEYS,
+    )
+)

@@ -467,6 +467,17 @@ class QuadrotorModel:
     """
 
     name = "quadrotor"
+    #: the keys of :meth:`info`
+    INFO_KEYS = (
+        "vehicle_terminated",
+        "crashed_uavs",
+        "motor_saturated_uavs",
+        "accel_limited_uavs",
+        "crashed",
+        "motor_saturated",
+        "accel_limited",
+        "tilt",
+    )
 
     def __init__(self, config: PairFlockConfig, num_swarms: int) -> None:
         if config.dim != 3:

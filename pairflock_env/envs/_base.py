@@ -1,7 +1,7 @@
-"""What every view (PettingZoo, Gymnasium Env and VectorEnv, SB3 VecEnv) shares: building the
-core and the learning interface from keyword arguments, the ``interface=`` keyword and its
-deprecated ``frame=`` alias, validating actions and reset options, holding a policy action
-for a decision period, rendering one swarm, and the closed-env guard. No physics here."""
+"""What every view (PettingZoo, Gymnasium Env and VectorEnv, SB3 VecEnv) shares: the view base
+class :class:`SwarmView` (building the core and the learning interface from keyword
+arguments, rendering, the closed-env guard), validating actions and reset options, and holding
+a policy action for a decision period. No physics here."""
 
 from __future__ import annotations
 
@@ -13,29 +13,25 @@ from typing import Any
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig
-from pairflock_env.core import PairFlockCore
+from pairflock_env.config.arrays import real_array
+from pairflock_env.core import PairFlockCore, check_count
 from pairflock_env.interfaces import INTERFACES, LearningInterface, make_interface
 from pairflock_env.interfaces.hold import DecisionHold
-from pairflock_env.task.actions import real_array
+from pairflock_env.render import SwarmRenderer
+from pairflock_env.swarm.placement import check_reset_options
 
 __all__ = [
     "RENDER_MODES",
-    "UNSET",
     "HeldStep",
     "SwarmRenderers",
-    "ViewLifecycle",
-    "build_core_and_interface",
+    "SwarmView",
     "check_policy_actions",
     "check_render_mode",
     "check_reset_options",
-    "deprecated_attr",
     "held_step",
-    "resolve_interface_args",
 ]
 
 RENDER_MODES = ("rgb_array", "human")
-#: marks a keyword the caller did not pass (so that a deprecated alias can be told apart)
-UNSET: Any = object()
 
 
 def check_render_mode(render_mode: Any) -> str | None:
@@ -46,63 +42,66 @@ def check_render_mode(render_mode: Any) -> str | None:
     return render_mode
 
 
-def resolve_interface_args(
-    interface: Any, interface_params: Any, frame: Any, frame_params: Any, default: str
-) -> tuple[str, dict[str, Any]]:
-    """The learning interface's name and parameters from a view's keywords.
-
-    ``frame`` / ``frame_params`` are the deprecated names of ``interface`` /
-    ``interface_params`` (DeprecationWarning); passing a name and its alias is a TypeError.
-    """
-    given = {"interface": "interface", "interface_params": "interface_params"}
-    for new, old, old_value in (
-        ("interface", "frame", frame),
-        ("interface_params", "frame_params", frame_params),
-    ):
-        if old_value is UNSET:
-            continue
-        warnings.warn(f"{old}= is deprecated; use {new}=", DeprecationWarning, stacklevel=3)
-        if (interface if new == "interface" else interface_params) is not UNSET:
-            raise TypeError(f"pass {new}= or its deprecated alias {old}=, not both")
-        given[new] = old  # errors name the keyword the caller used
-        if new == "interface":
-            interface = old_value
-        else:
-            interface_params = old_value
-    name = default if interface is UNSET else interface
+def _interface_args(interface: Any, params: Any, default: str) -> tuple[str, dict[str, Any]]:
+    """The learning interface's name and parameters from a view's keywords."""
+    name = default if interface is None else interface
     if not isinstance(name, str) or name not in INTERFACES:
-        raise ValueError(
-            f"{given['interface']}={name!r} is invalid: must be one of {list(INTERFACES)}"
-        )
-    params = None if interface_params is UNSET else interface_params
+        raise ValueError(f"interface={name!r} is invalid: must be one of {list(INTERFACES)}")
     if params is not None and not isinstance(params, Mapping):
-        raise TypeError(
-            f"{given['interface_params']}={params!r} is invalid: must be a dict or None"
-        )
+        raise TypeError(f"interface_params={params!r} is invalid: must be a dict or None")
     return name, dict(params or {})
 
 
-def build_core_and_interface(
-    preset: str | None,
-    config: PairFlockConfig | None,
-    overrides: Mapping[str, Any],
-    num_swarms: int,
-    seed: Any,
-    interface: str,
-    interface_params: Mapping[str, Any],
-    render_mode: str | None,
-) -> tuple[PairFlockCore, LearningInterface]:
-    """A validated core of ``num_swarms`` swarms and its learning interface.
+class SwarmView:
+    """The base of every view: one core of ``num_swarms`` swarms, its learning interface,
+    its renderers, and the closed-env guard.
 
-    The config is resolved in one place, the core's constructor (``config``, else ``preset``
-    plus the flat ``overrides``); ``interface`` / ``interface_params`` come from
-    :func:`resolve_interface_args`.
+    A view calls :meth:`_open` first thing in its constructor; after ``close()`` it refuses
+    ``reset()`` / ``step()`` with a ``RuntimeError`` (a closed env has released its windows
+    and is not reused).
     """
-    check_render_mode(render_mode)
-    if config is not None and not isinstance(config, PairFlockConfig):
-        raise TypeError(f"config={config!r} is invalid: must be a PairFlockConfig or None")
-    core = PairFlockCore(config, num_swarms=num_swarms, seed=seed, preset=preset, **overrides)
-    return core, make_interface(interface, core.config, **interface_params)
+
+    _closed = False
+    #: the learning interface a view uses when ``interface`` is not given
+    default_interface = "pair"
+
+    def _open(
+        self,
+        *,
+        preset: str | None,
+        config: PairFlockConfig | None,
+        overrides: Mapping[str, Any],
+        num_swarms: int,
+        seed: Any,
+        interface: str | None,
+        interface_params: Mapping[str, Any] | None,
+        render_mode: str | None,
+    ) -> None:
+        """Validate the keywords, then build the core (the config is resolved in one place,
+        the core's constructor: ``config``, else ``preset`` plus the flat ``overrides``) and
+        its learning interface."""
+        name, params = _interface_args(interface, interface_params, self.default_interface)
+        check_render_mode(render_mode)
+        check_count("num_swarms", num_swarms)
+        if config is not None and not isinstance(config, PairFlockConfig):
+            raise TypeError(f"config={config!r} is invalid: must be a PairFlockConfig or None")
+        core = PairFlockCore(config, num_swarms=num_swarms, seed=seed, preset=preset, **overrides)
+        self.core = core
+        self.interface: LearningInterface = make_interface(name, core.config, **params)
+        self.interface_name = name
+        self.config = core.config
+        self.layout = core.layout
+        self.render_mode = render_mode
+        #: the physical observation (B, M, obs_size) behind the last encoded one
+        self.physical_obs: np.ndarray | None = None
+        self._renderers = SwarmRenderers(core, render_mode)
+
+    def _check_open(self, method: str) -> None:
+        if self._closed:
+            raise RuntimeError(f"{method}() called after close(); create a new env")
+
+    def _mark_closed(self) -> None:
+        self._closed = True
 
 
 def check_policy_actions(actions: Any, shape: tuple[int, ...], name: str = "actions") -> np.ndarray:
@@ -114,30 +113,6 @@ def check_policy_actions(actions: Any, shape: tuple[int, ...], name: str = "acti
     result is always finite: one check per action, nothing to repeat here.
     """
     return real_array(actions, name, shape)
-
-
-def check_reset_options(options: Any, n_uavs: int, dim: int, name: str = "options") -> None:
-    """Raise TypeError/ValueError unless ``options`` is None or a dict whose ``positions`` /
-    ``velocities`` are finite (n_uavs, dim) arrays: what a one-swarm reset accepts.
-
-    For views that reset several swarms with different options in separate core calls, so
-    that every swarm's options are checked before the first swarm is reset.
-    """
-    if options is None:
-        return
-    if not isinstance(options, Mapping):
-        raise TypeError(f"{name}={options!r} is invalid: must be a dict or None")
-    for key in ("positions", "velocities"):
-        if options.get(key) is None:
-            continue
-        try:
-            arr = np.asarray(options[key], dtype=np.float64)
-        except (TypeError, ValueError):
-            raise TypeError(f"{name}[{key!r}] must be a numeric array") from None
-        if arr.shape not in ((n_uavs, dim), (1, n_uavs, dim)):
-            raise ValueError(f"{name}[{key!r}] has shape {arr.shape}, expected ({n_uavs}, {dim})")
-        if not np.isfinite(arr).all():
-            raise ValueError(f"{name}[{key!r}] contains NaN or inf")
 
 
 @dataclasses.dataclass
@@ -246,8 +221,6 @@ class SwarmRenderers:
             return None
         if not self._ready:
             raise RuntimeError("call reset() before render(): there is no swarm to draw yet")
-        from pairflock_env.render import SwarmRenderer
-
         r = self._renderers.get(b)
         if r is None:
             cfg = self.core.config
@@ -272,28 +245,3 @@ class SwarmRenderers:
         for r in self._renderers.values():
             r.close()
         self._renderers.clear()
-
-
-class ViewLifecycle:
-    """Mixin: after ``close()`` the env refuses ``reset()`` / ``step()`` with a RuntimeError
-    (a closed env has released its windows and is not reused)."""
-
-    _closed = False
-
-    def _check_open(self, method: str) -> None:
-        if self._closed:
-            raise RuntimeError(f"{method}() called after close(); create a new env")
-
-    def _mark_closed(self) -> None:
-        self._closed = True
-
-
-def deprecated_attr(module: str, name: str, aliases: Mapping[str, str], namespace: dict) -> Any:
-    """Module ``__getattr__`` helper: old public names that still work, with a warning."""
-    if name in aliases:
-        new = aliases[name]
-        warnings.warn(
-            f"{module}.{name} is deprecated; use {module}.{new}", DeprecationWarning, stacklevel=3
-        )
-        return namespace[new]
-    raise AttributeError(f"module {module!r} has no attribute {name!r}")

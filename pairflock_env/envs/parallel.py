@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -12,16 +11,7 @@ from pettingzoo import ParallelEnv
 
 from pairflock_env.config import PairFlockConfig
 from pairflock_env.core import AGENT_INFO_KEYS, SWARM_INFO_KEYS
-from pairflock_env.envs._base import (
-    RENDER_MODES,
-    UNSET,
-    SwarmRenderers,
-    ViewLifecycle,
-    build_core_and_interface,
-    check_policy_actions,
-    held_step,
-    resolve_interface_args,
-)
+from pairflock_env.envs._base import RENDER_MODES, SwarmView, check_policy_actions, held_step
 from pairflock_env.seeding import check_seed
 from pairflock_env.task.observations import ObsLayout
 from pairflock_env.task.spaces import StateLayout, global_state, state_bounds
@@ -127,8 +117,7 @@ Numbers only: {info_keys}, plus ``reward_<term>`` for each reward term, ``uav_in
 (``"world"`` or ``"pair"``), ``interface_params`` (dict), ``render_mode`` (``"rgb_array"`` or
 ``"human"``), ``seed`` (of the swarm generator when ``reset`` gets none) and any
 ``PairFlockConfig`` field as a keyword (``n_uavs=100``, ``d_m=4.0``, ``max_cycles=500``,
-...). ``frame`` / ``frame_params`` are deprecated aliases of ``interface`` /
-``interface_params``.
+...).
 
 ## Example
 >>> from pairflock_env import parallel_env
@@ -144,7 +133,7 @@ Numbers only: {info_keys}, plus ``reward_<term>`` for each reward term, ``uav_in
 """
 
 
-class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
+class PairFlockParallelEnv(SwarmView, ParallelEnv):
     __doc__ = _DOC.format(
         table=ObsLayout(2, 6).markdown_table(),
         state_table=StateLayout(3, 2).markdown_table(),
@@ -158,28 +147,30 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         "is_parallelizable": True,
     }
 
+    default_interface = "world"
+
     def __init__(
         self,
         preset: str | None = "paper",
         *,
         config: PairFlockConfig | None = None,
-        interface: str = UNSET,
-        interface_params: Mapping[str, Any] | None = UNSET,
+        interface: str | None = None,
+        interface_params: Mapping[str, Any] | None = None,
         render_mode: str | None = None,
         seed: Any = None,
-        frame: str = UNSET,
-        frame_params: Mapping[str, Any] | None = UNSET,
         **overrides: Any,
     ) -> None:
-        name, params = resolve_interface_args(
-            interface, interface_params, frame, frame_params, "world"
+        self._open(
+            preset=preset,
+            config=config,
+            overrides=overrides,
+            num_swarms=1,
+            seed=seed,
+            interface=interface,
+            interface_params=interface_params,
+            render_mode=render_mode,
         )
-        self.core, self.interface = build_core_and_interface(
-            preset, config, overrides, 1, seed, name, params, render_mode
-        )
-        self.interface_name = name
-        self.config = cfg = self.core.config
-        self.layout = self.core.layout
+        cfg = self.config
         self.state_layout = StateLayout(cfg.n_uavs, cfg.dim)
         self.render_mode = render_mode
         self.possible_agents = [agent_name(i) for i in self.core.agent_uavs]
@@ -205,8 +196,6 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
             a: spaces.Box(-1.0, 1.0, (cfg.dim,), np.float32) for a in self.possible_agents
         }
         self.state_space = spaces.Box(*state_bounds(cfg), dtype=np.float32)
-        self.physical_obs: np.ndarray | None = None
-        self._frames = SwarmRenderers(self.core, render_mode)
         self._title_values: tuple[float, float] | None = None  # of the render title
 
     # PettingZoo requires the same object on every call
@@ -217,22 +206,14 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         return self.action_spaces[agent]
 
     @property
-    def num_envs(self) -> int:
+    def num_swarms(self) -> int:
         """1: one swarm (the batched views are the Gymnasium vector and SB3 envs)."""
         return 1
-
-    num_swarms = num_envs
 
     @property
     def reward_range(self) -> tuple[float, float]:
         """Every per-agent reward lies in this range (the interface's)."""
         return self.interface.reward_range
-
-    @property
-    def frame(self) -> str:
-        """Deprecated name of :attr:`interface_name`."""
-        warnings.warn("frame is deprecated; use interface_name", DeprecationWarning, stacklevel=2)
-        return self.interface_name
 
     # ------------------------------------------------------------------ API
     def reset(self, seed: Any = None, options: Mapping[str, Any] | None = None):
@@ -242,7 +223,7 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         seed = check_seed(seed)
         res = self.core.reset(seed=None if seed is None else [seed], options=options)
         self.agents = list(self.possible_agents)
-        self._frames.reset()
+        self._renderers.reset()
         return self._emit(res.obs), self._infos(res.info)
 
     def check_action(self, agent: Any, action: Any) -> np.ndarray:
@@ -353,11 +334,11 @@ class PairFlockParallelEnv(ViewLifecycle, ParallelEnv):
         if self._title_values is not None:
             t, dist = self._title_values
             title = f"t = {t:.2f} s   pair distance = {dist:.2f} m"
-        return self._frames.render(0, title)
+        return self._renderers.render(0, title)
 
     def close(self) -> None:
         """Release the renderer; the env cannot be reset or stepped afterwards."""
-        self._frames.close()
+        self._renderers.close()
         self._mark_closed()
 
 

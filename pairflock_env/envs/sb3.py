@@ -2,7 +2,6 @@
 
 Imports stable-baselines3, so it is loaded lazily (``pairflock_env.envs.PairFlockSB3VecEnv`` or
 ``from pairflock_env.envs.sb3 import PairFlockSB3VecEnv``); ``import pairflock_env`` stays light.
-``PairFlockVecEnv`` is its deprecated former name.
 """
 
 from __future__ import annotations
@@ -23,29 +22,19 @@ except ImportError as e:  # pragma: no cover - depends on the install
     ) from e
 
 from pairflock_env.config import PairFlockConfig
-from pairflock_env.core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, check_count
+from pairflock_env.core import AGENT_INFO_KEYS, SWARM_INFO_KEYS
 from pairflock_env.envs._base import (
     RENDER_MODES,
-    UNSET,
     SwarmRenderers,
-    ViewLifecycle,
-    build_core_and_interface,
+    SwarmView,
     check_policy_actions,
-    check_reset_options,
-    deprecated_attr,
     held_step,
-    resolve_interface_args,
 )
 from pairflock_env.envs.parallel import agent_name
 from pairflock_env.seeding import offset_seeds
+from pairflock_env.swarm.placement import check_reset_options
 
 __all__ = ["AgentRow", "PairFlockSB3VecEnv"]
-
-_DEPRECATED = {"PairFlockVecEnv": "PairFlockSB3VecEnv"}
-
-
-def __getattr__(name: str) -> Any:
-    return deprecated_attr(__name__, name, _DEPRECATED, globals())
 
 
 class AgentRow:
@@ -150,7 +139,7 @@ class AgentRow:
     # --- methods ----------------------------------------------------------------------
     def render(self):
         """The row's swarm as an RGB frame (``render_mode="rgb_array"``) or in a window."""
-        return self._venv._frames.render(self.swarm)
+        return self._venv._renderers.render(self.swarm)
 
     def swarm_state(self) -> dict[str, Any]:
         """Copies of the row's swarm state: positions, velocities (N, dim), sim time, steps."""
@@ -169,16 +158,16 @@ class AgentRow:
         return f"AgentRow(index={self.index}, swarm={self.swarm}, agent={self.agent!r})"
 
 
-class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
+class PairFlockSB3VecEnv(SwarmView, VecEnv):
     """SB3 ``VecEnv`` with one row per paired UAV, over one
     :class:`~pairflock_env.core.PairFlockCore` of ``num_swarms`` swarms, with parameter
     sharing: row ``b * M + m`` is paired UAV m of swarm b (M = 2 x pairs, ``agents_per_swarm``),
     so one policy drives every paired UAV. ``num_envs`` (SB3's name) = ``num_rows`` =
-    ``num_swarms * M``. (Formerly ``PairFlockVecEnv``, a deprecated alias.)
+    ``num_swarms * M``.
 
     Observation/action/reward of a row are those of the learning interface ``interface``
     (:mod:`pairflock_env.interfaces`; ``"pair"`` by default, ``"world"`` for the raw env;
-    parameters in ``interface_params``; ``frame`` / ``frame_params`` are deprecated aliases). One
+    parameters in ``interface_params``). One
     step is one policy decision: the action is held for the interface's ``decision_period``
     control steps and the reward is their mean.
 
@@ -211,24 +200,22 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
         config: PairFlockConfig | None = None,
         num_swarms: int = 1,
         seed: Any = None,
-        interface: str = UNSET,
-        interface_params: Mapping[str, Any] | None = UNSET,
+        interface: str | None = None,
+        interface_params: Mapping[str, Any] | None = None,
         render_mode: str | None = None,
         info_keys: Iterable[str] | str = (),
-        frame: str = UNSET,
-        frame_params: Mapping[str, Any] | None = UNSET,
         **overrides: Any,
     ) -> None:
-        name, params = resolve_interface_args(
-            interface, interface_params, frame, frame_params, "pair"
+        self._open(
+            preset=preset,
+            config=config,
+            overrides=overrides,
+            num_swarms=num_swarms,
+            seed=seed,
+            interface=interface,
+            interface_params=interface_params,
+            render_mode=render_mode,
         )
-        check_count("num_swarms", num_swarms)
-        self.core, self.interface = build_core_and_interface(
-            preset, config, overrides, num_swarms, seed, name, params, render_mode
-        )
-        self.interface_name = name
-        self.config = self.core.config
-        self.layout = self.core.layout
         self.num_swarms = self.core.num_swarms
         self.agents_per_swarm = M = self.core.n_agents
         valid = AGENT_INFO_KEYS + SWARM_INFO_KEYS
@@ -241,14 +228,11 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
         if bad:
             raise ValueError(f"info_keys {bad} are invalid: valid keys are {list(valid)}")
         self.info_keys = info_keys
-        self.render_mode = render_mode
         self.num_rows = n_rows = self.num_swarms * M
         self._rows = [AgentRow(self, i) for i in range(n_rows)]
-        self._frames = SwarmRenderers(self.core, render_mode)
         obs_space = spaces.Box(*self.interface.observation_bounds(), dtype=np.float32)
         act_space = spaces.Box(-1.0, 1.0, (self.config.dim,), np.float32)
         super().__init__(n_rows, obs_space, act_space)
-        self.physical_obs: np.ndarray | None = None  # (B, M, obs_size)
         self._actions: np.ndarray | None = None
         self._was_reset = False
 
@@ -256,12 +240,6 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
     def reward_range(self) -> tuple[float, float]:
         """Every row's reward lies in this range (the interface's)."""
         return self.interface.reward_range
-
-    @property
-    def frame(self) -> str:
-        """Deprecated name of :attr:`interface_name`."""
-        warnings.warn("frame is deprecated; use interface_name", DeprecationWarning, stacklevel=2)
-        return self.interface_name
 
     # ------------------------------------------------------------------ seeding/reset
     def seed(self, seed: Any = None) -> Sequence[Any]:
@@ -283,7 +261,7 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
             raise ValueError(f"options has {len(rows)} entries, expected {self.num_envs} (rows)")
         N, D = self.config.n_uavs, self.config.dim
         for i, o in enumerate(rows):
-            check_reset_options(o, N, D, f"options of row {i}")
+            check_reset_options(o, 1, N, D, f"options of row {i}")
         super().set_options(options)
 
     def _per_swarm(self, values: list[Any], what: str) -> list[Any]:
@@ -311,7 +289,7 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
         options = self._per_swarm(list(self._options), "options")
         N, D = self.config.n_uavs, self.config.dim
         for b, o in enumerate(options):  # every swarm's options before the first reset
-            check_reset_options(o or None, N, D, f"options of swarm {b}")
+            check_reset_options(o or None, 1, N, D, f"options of swarm {b}")
         all_rows = np.arange(self.num_swarms)
         if all(not o for o in options):
             res = self.core.reset_rows(
@@ -324,7 +302,7 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
         self._reset_seeds()
         self._reset_options()
         self._was_reset = True
-        self._frames.reset()
+        self._renderers.reset()
         self.physical_obs = res.obs.copy()
         self.reset_infos = [{} for _ in range(self.num_envs)]
         self._fill_infos(self.reset_infos, res.info, np.arange(self.num_swarms))
@@ -370,7 +348,7 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
                 for m in range(M):
                     self.reset_infos[b * M + m] = {}
             self._fill_infos(self.reset_infos, rr.info, ended)
-            self._frames.reset(set(ended.tolist()))
+            self._renderers.reset(set(ended.tolist()))
         self.physical_obs = physical.copy()
         dones = np.repeat(done_sw, M)
         if self.render_mode == "human":
@@ -415,9 +393,9 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
             raise ValueError(
                 f"state has {core.num_swarms} swarms, this env has num_swarms={self.num_swarms}"
             )
-        self._frames.close()
+        self._renderers.close()
         self.core = copy.deepcopy(core)
-        self._frames = SwarmRenderers(self.core, self.render_mode)
+        self._renderers = SwarmRenderers(self.core, self.render_mode)
         po = state["physical_obs"]
         self.physical_obs = None if po is None else po.copy()
         self._seeds = list(state["seeds"])
@@ -467,12 +445,12 @@ class PairFlockSB3VecEnv(ViewLifecycle, VecEnv):
                 stacklevel=2,
             )
             return [None] * self.num_envs
-        frames = [self._frames.render(b) for b in range(self.num_swarms)]
+        frames = [self._renderers.render(b) for b in range(self.num_swarms)]
         return [frames[i // self.agents_per_swarm] for i in range(self.num_envs)]
 
     def close(self) -> None:
         """Release the renderers; the env cannot be reset or stepped afterwards."""
-        self._frames.close()
+        self._renderers.close()
         self._mark_closed()
 
 

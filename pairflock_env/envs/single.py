@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -13,13 +12,9 @@ from gymnasium import spaces
 from pairflock_env.config import PairFlockConfig
 from pairflock_env.envs._base import (
     RENDER_MODES,
-    UNSET,
-    SwarmRenderers,
-    ViewLifecycle,
-    build_core_and_interface,
+    SwarmView,
     check_policy_actions,
     held_step,
-    resolve_interface_args,
 )
 from pairflock_env.seeding import check_seed
 
@@ -28,7 +23,7 @@ __all__ = ["ENV_ID", "PairFlockGymEnv"]
 ENV_ID = "pairflock/PairFlock-v0"
 
 
-class PairFlockGymEnv(ViewLifecycle, gym.Env):
+class PairFlockGymEnv(SwarmView, gym.Env):
     """One UAV swarm flocking with the protocol of eqs. 11-19; the agent controls the pair.
 
     ``gymnasium.make("pairflock/PairFlock-v0", n_uavs=20, pair_accel_limit=50.0)``. Every UAV
@@ -89,8 +84,7 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
     (``"pair"`` or ``"world"``), ``interface_params`` (dict of
     :class:`~pairflock_env.interfaces.PairInterfaceParams` fields), ``render_mode``
     (``"rgb_array"`` / ``"human"``), ``seed`` (of the swarm generator when ``reset`` gets
-    none) and any ``PairFlockConfig`` field as a keyword. ``frame`` / ``frame_params`` are
-    deprecated aliases of ``interface`` / ``interface_params``.
+    none) and any ``PairFlockConfig`` field as a keyword.
 
     ## Example
     >>> import gymnasium as gym, pairflock_env
@@ -113,42 +107,32 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
         preset: str | None = "paper",
         *,
         config: PairFlockConfig | None = None,
-        interface: str = UNSET,
-        interface_params: Mapping[str, Any] | None = UNSET,
+        interface: str | None = None,
+        interface_params: Mapping[str, Any] | None = None,
         render_mode: str | None = None,
         seed: Any = None,
-        frame: str = UNSET,
-        frame_params: Mapping[str, Any] | None = UNSET,
         **overrides: Any,
     ) -> None:
-        name, params = resolve_interface_args(
-            interface, interface_params, frame, frame_params, "pair"
+        self._open(
+            preset=preset,
+            config=config,
+            overrides=overrides,
+            num_swarms=1,
+            seed=seed,
+            interface=interface,
+            interface_params=interface_params,
+            render_mode=render_mode,
         )
-        self.core, self.interface = build_core_and_interface(
-            preset, config, overrides, 1, seed, name, params, render_mode
-        )
-        self.interface_name = name
-        self.config = self.core.config
-        self.layout = self.core.layout
-        self.render_mode = render_mode
         M, D = self.core.n_agents, self.config.dim
         low, high = self.interface.observation_bounds()
         self.observation_space = spaces.Box(np.tile(low, M), np.tile(high, M), dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, (M * D,), np.float32)
-        self.physical_obs: np.ndarray | None = None
         self._live = False
-        self._frames = SwarmRenderers(self.core, render_mode)
 
     @property
     def reward_range(self) -> tuple[float, float]:
         """The reward (the mean over the paired UAVs) lies in the interface's range."""
         return self.interface.reward_range
-
-    @property
-    def frame(self) -> str:
-        """Deprecated name of :attr:`interface_name`."""
-        warnings.warn("frame is deprecated; use interface_name", DeprecationWarning, stacklevel=2)
-        return self.interface_name
 
     def reset(self, *, seed: Any = None, options: dict[str, Any] | None = None):
         """Start an episode; ``seed``: None, an int >= 0 or a SeedSequence."""
@@ -159,7 +143,7 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
         self._np_random = self.core.rngs[0]
         self._np_random_seed = seed if isinstance(seed, int) else -1
         self._live = True
-        self._frames.reset()
+        self._renderers.reset()
         self.physical_obs = res.obs[0]
         obs = self.interface.encode(res.obs[0]).reshape(-1)
         if self.render_mode == "human":
@@ -193,9 +177,9 @@ class PairFlockGymEnv(ViewLifecycle, gym.Env):
 
     def render(self):
         """The swarm as an RGB array (``render_mode="rgb_array"``) or in a window."""
-        return self._frames.render(0)
+        return self._renderers.render(0)
 
     def close(self) -> None:
         """Release the renderer; the env cannot be reset or stepped afterwards."""
-        self._frames.close()
+        self._renderers.close()
         self._mark_closed()

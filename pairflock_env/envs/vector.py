@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Mapping
 from typing import Any
 
@@ -12,33 +11,23 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from pairflock_env.config import PairFlockConfig
+from pairflock_env.core import check_count
 from pairflock_env.envs._base import (
     RENDER_MODES,
-    UNSET,
-    SwarmRenderers,
-    ViewLifecycle,
-    build_core_and_interface,
+    SwarmView,
     check_policy_actions,
-    deprecated_attr,
     held_step,
-    resolve_interface_args,
 )
 from pairflock_env.seeding import offset_seeds
 
 __all__ = ["PairFlockGymVectorEnv"]
 
-_DEPRECATED = {"PairFlockVectorEnv": "PairFlockGymVectorEnv"}
 
-
-def __getattr__(name: str) -> Any:
-    return deprecated_attr(__name__, name, _DEPRECATED, globals())
-
-
-class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
+class PairFlockGymVectorEnv(SwarmView, VectorEnv):
     """Gymnasium ``VectorEnv`` with one row per swarm: B independent swarms, each exactly
     :class:`~pairflock_env.envs.single.PairFlockGymEnv`, simulated side by side in one
     :class:`~pairflock_env.core.PairFlockCore`. ``num_envs`` (Gymnasium's name) =
-    ``num_swarms`` = ``num_rows`` = B. (Formerly ``PairFlockVectorEnv``, a deprecated alias.)
+    ``num_swarms`` = ``num_rows`` = B.
 
     ``gymnasium.make_vec("pairflock/PairFlock-v0", num_envs=B,
     vectorization_mode="vector_entry_point", **kwargs)`` builds it; ``kwargs`` are those of
@@ -67,18 +56,13 @@ class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
         preset: str | None = "paper",
         *,
         config: PairFlockConfig | None = None,
-        interface: str = UNSET,
-        interface_params: Mapping[str, Any] | None = UNSET,
+        interface: str | None = None,
+        interface_params: Mapping[str, Any] | None = None,
         render_mode: str | None = None,
         seed: Any = None,
         autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
-        frame: str = UNSET,
-        frame_params: Mapping[str, Any] | None = UNSET,
         **overrides: Any,
     ) -> None:
-        name, params = resolve_interface_args(
-            interface, interface_params, frame, frame_params, "pair"
-        )
         try:
             mode = AutoresetMode(autoreset_mode)
         except ValueError:
@@ -86,15 +70,19 @@ class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
                 f"autoreset_mode={autoreset_mode!r} is invalid: must be one of "
                 f"{[m.value for m in AutoresetMode]}"
             ) from None
-        self.core, self.interface = build_core_and_interface(
-            preset, config, overrides, num_envs, seed, name, params, render_mode
+        check_count("num_envs", num_envs)
+        self._open(
+            preset=preset,
+            config=config,
+            overrides=overrides,
+            num_swarms=num_envs,
+            seed=seed,
+            interface=interface,
+            interface_params=interface_params,
+            render_mode=render_mode,
         )
-        self.interface_name = name
         self.num_envs = self.core.num_swarms
         self.num_swarms = self.num_rows = self.num_envs
-        self.config = self.core.config
-        self.layout = self.core.layout
-        self.render_mode = render_mode
         self.autoreset_mode = mode
         self.metadata = {
             "render_modes": list(RENDER_MODES),
@@ -109,21 +97,13 @@ class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
         self.single_action_space = spaces.Box(-1.0, 1.0, (M * D,), np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self.physical_obs: np.ndarray | None = None
         self._needs_reset = np.zeros(self.num_envs, bool)
         self._was_reset = False
-        self._frames = SwarmRenderers(self.core, render_mode)
 
     @property
     def reward_range(self) -> tuple[float, float]:
         """Every reward (the mean over a swarm's paired UAVs) lies in this range."""
         return self.interface.reward_range
-
-    @property
-    def frame(self) -> str:
-        """Deprecated name of :attr:`interface_name`."""
-        warnings.warn("frame is deprecated; use interface_name", DeprecationWarning, stacklevel=2)
-        return self.interface_name
 
     # ------------------------------------------------------------------ reset
     def reset(self, *, seed: Any = None, options: dict[str, Any] | None = None):
@@ -152,7 +132,7 @@ class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
             self._np_random_seed = seeds[0] if isinstance(seeds[0], int) else -1
         self._needs_reset[rows] = False
         self._was_reset = True
-        self._frames.reset(set(rows.tolist()))
+        self._renderers.reset(set(rows.tolist()))
         self.physical_obs = res.obs.copy()
         obs = self.interface.encode(res.obs).reshape(self.num_envs, -1)
         return obs, self._infos(res.info, rows)
@@ -195,7 +175,7 @@ class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
                 final_obs[r] = enc[r]
             rr = self.core.reset_rows(rows)
             obs_phys, info = self._merge(res, rr, rows)
-            self._frames.reset(set(rows.tolist()))
+            self._renderers.reset(set(rows.tolist()))
             extra = {
                 "final_obs": final_obs,
                 "_final_obs": ended.copy(),
@@ -205,7 +185,7 @@ class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
         elif self.autoreset_mode != AutoresetMode.SAME_STEP:
             self._needs_reset = ended.copy()
             if pending.size:
-                self._frames.reset(set(pending.tolist()))
+                self._renderers.reset(set(pending.tolist()))
         self.physical_obs = obs_phys.copy()
         obs = self.interface.encode(obs_phys).reshape(B, -1)
         infos = self._infos(info, np.arange(B))
@@ -244,11 +224,11 @@ class PairFlockGymVectorEnv(ViewLifecycle, VectorEnv):
     def render(self) -> tuple[Any, ...] | None:
         """One frame per sub-env (``render_mode="rgb_array"``), or the windows (``"human"``)."""
         if self.render_mode is None:
-            return self._frames.render(0)  # warns
-        frames = tuple(self._frames.render(b) for b in range(self.num_envs))
+            return self._renderers.render(0)  # warns
+        frames = tuple(self._renderers.render(b) for b in range(self.num_envs))
         return frames if self.render_mode == "rgb_array" else None
 
     def close_extras(self, **kwargs: Any) -> None:
         """Release the renderers; the env cannot be reset or stepped afterwards."""
-        self._frames.close()
+        self._renderers.close()
         self._mark_closed()

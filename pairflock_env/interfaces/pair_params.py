@@ -1,11 +1,10 @@
-"""Declared parameters of the pair-frame learning interface (``frame="pair"``).
+"""Declared parameters of the pair learning interface (``interface="pair"``).
 
-:class:`PairInterfaceParams` is the second configuration of the project: the parameters of
-:class:`pairflock_env.interfaces.PairInterface` (given as ``frame_params={...}`` to the
+:class:`PairInterfaceParams` holds the parameters of
+:class:`pairflock_env.interfaces.PairInterface` (given as ``interface_params={...}`` to the
 learning views and stored with every trained model). It is declared like
 :class:`~pairflock_env.config.PairFlockConfig` (type, unit, range, default and meaning per
 field), so that validation, messages and its table in ``docs/config.md`` come from one place.
-Users import it from :mod:`pairflock_env.interfaces`.
 """
 
 from __future__ import annotations
@@ -124,7 +123,6 @@ _SECTION = Section(
             2.0,
             "m",
             "Below this distance to a non-partner UAV the separation penalty grows linearly.",
-            aliases=("safe_distance",),
         ),
         Field(
             "approach_horizon",
@@ -156,15 +154,19 @@ _SECTION = Section(
 #: the declared parameters of :class:`PairInterfaceParams`
 PAIR_INTERFACE_SCHEMA = Schema("pair-interface parameter", (_SECTION,))
 
+
+class _Stored(Record):
+    stored_as = "interface"
+
+
 PairInterfaceParams = declare_record(
     "PairInterfaceParams",
     PAIR_INTERFACE_SCHEMA,
-    Record,
+    _Stored,
     "pairflock_env.interfaces",  # where users import it from (and old pickles find it)
     """Parameters of :class:`PairInterface` (units and ranges: docs/config.md).
 
     A frozen dataclass with keyword-only construction; unknown names raise ``TypeError`` with
     a did-you-mean hint, bad values ``ValueError``, each naming the parameter.
-    ``safe_distance`` is the deprecated name of ``separation_distance``.
     """,
 )

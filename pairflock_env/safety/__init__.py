@@ -1,6 +1,8 @@
-"""A decentralised, minimally invasive safety filter for the paired UAVs (docs/safety.md).
+"""Safety filters between the decoded pair command and the vehicle model, and their registry
+:data:`FILTERS` (``safety_filter``: ``"none"``, ``"cbf"``, or a registered plug-in).
 
-Each paired UAV replaces its nominal pair command u_nom by the command nearest to it (in the
+``"cbf"`` is a decentralised, minimally invasive filter for the paired UAVs (docs/safety.md):
+each paired UAV replaces its nominal pair command u_nom by the command nearest to it (in the
 Euclidean norm, within ``||u|| <= accel_limit``) that satisfies one discrete-time
 braking-distance barrier constraint per UAV it senses, so that it keeps ``safety_distance``
 from every other UAV under the stated assumptions:
@@ -15,10 +17,18 @@ from every other UAV under the stated assumptions:
 >>> bool(out.active[0, 0]), bool(out.u[0, 0, 0] < 0)  # the filter brakes instead
 (True, True)
 
-:mod:`.qp` holds the exact solver of the per-agent problem, :mod:`.barrier` the constraints
-and the batched numba kernel, :mod:`.params` the parameters.
+:mod:`.cbf.qp` holds the exact solver of the per-agent problem, :mod:`.cbf.barrier` the
+constraints and the batched numba kernel, :mod:`.cbf.params` the parameters,
+:mod:`.stage` what the core holds.
 """
 
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Any
+
+from pairflock_env.config.registry import FILTERS, Plugin
 from pairflock_env.safety.cbf.barrier import SafetyFilter, SafetyOutput, safety_filter
 from pairflock_env.safety.cbf.params import SafetyParams
 from pairflock_env.safety.cbf.qp import (
@@ -28,15 +38,54 @@ from pairflock_env.safety.cbf.qp import (
     max_margin,
     project,
 )
+from pairflock_env.safety.stage import SAFETY_INFO_KEYS, CBFStage, NoFilterStage
 
 __all__ = [
+    "FILTERS",
+    "SAFETY_INFO_KEYS",
     "STATUS_INFEASIBLE",
     "STATUS_NOMINAL",
     "STATUS_PROJECTED",
+    "CBFStage",
+    "Filter",
+    "NoFilterStage",
     "SafetyFilter",
     "SafetyOutput",
     "SafetyParams",
+    "make_safety_stage",
     "max_margin",
     "project",
     "safety_filter",
 ]
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Filter(Plugin):
+    """A registered safety filter.
+
+    Attributes (besides :class:`~pairflock_env.config.registry.Plugin`'s):
+        stage: builds what the core holds, ``stage(config, agent_uavs, num_swarms,
+            partner_uavs)``, with ``apply(q, p, flock_acc, u, grid) -> u`` (B, M, dim) and
+            ``info(reset=False)`` -> arrays (B, M) or (B,) that include ``SAFETY_INFO_KEYS``.
+        info_keys: the keys its ``info`` adds to ``SAFETY_INFO_KEYS``.
+    """
+
+    stage: Callable[..., Any]
+    info_keys: tuple[str, ...] = ()
+
+
+def make_safety_stage(config: Any, agent_uavs: Any, num_swarms: int, partner_uavs: Any) -> Any:
+    """The stage of the filter ``config.safety_filter`` for a core."""
+    return FILTERS[config.safety_filter].stage(config, agent_uavs, num_swarms, partner_uavs)
+
+
+FILTERS.register(
+    Filter(name="none", doc="the pair command is applied as decoded", stage=NoFilterStage)
+)
+FILTERS.register(
+    Filter(
+        name="cbf",
+        doc="every paired UAV keeps safety_distance from every UAV it senses (docs/safety.md)",
+        stage=CBFStage,
+    )
+)

@@ -1,10 +1,13 @@
 """The safety stage of the core's step: the configured filter applied to the decoded pair
 command, and its per-agent infos.
 
-:class:`SafetyStage` is what :class:`~pairflock_env.core.PairFlockCore` holds: with
-``safety_filter="none"`` it returns the command unchanged (the same array) and reports zeros;
-with ``"cbf"`` it runs one :class:`~.barrier.SafetyFilter` over all B x M agents with
-preallocated outputs. Both vehicle models get the same stage: it changes the pair term of
+A stage is what a :class:`~pairflock_env.safety.Filter` entry builds for a core:
+``stage(config, agent_uavs, num_swarms, partner_uavs)`` with :meth:`apply` (the command to
+use, from what each UAV senses) and :meth:`info` (at least ``SAFETY_INFO_KEYS``, (B, M)).
+:class:`NoFilterStage` (``safety_filter="none"``) returns the command unchanged (the same
+array) and reports zeros; :class:`CBFStage` (``"cbf"``) runs one
+:class:`~pairflock_env.safety.cbf.barrier.SafetyFilter` over all B x M agents with
+preallocated outputs. Every vehicle model gets the same stage: it changes the pair term of
 the desired acceleration, which the particle integrates and the quadrotor's attitude loop
 tracks.
 """
@@ -18,15 +21,34 @@ import numpy as np
 from pairflock_env.safety.cbf.barrier import SafetyFilter, SafetyOutput
 from pairflock_env.safety.cbf.params import SafetyParams
 from pairflock_env.swarm.grid import NeighborGrid
+from pairflock_env.task.infos import SAFETY_INFO_KEYS
 
-__all__ = ["SAFETY_INFO_KEYS", "SafetyStage"]
-
-#: per-agent infos of the stage, (B, M): bool, m/s^2, bool
-SAFETY_INFO_KEYS = ("safety_active", "safety_correction", "safety_infeasible")
+__all__ = ["SAFETY_INFO_KEYS", "CBFStage", "NoFilterStage"]
 
 
-class SafetyStage:
-    """Stage 2b of a core step (between decoding and the desired acceleration).
+class NoFilterStage:
+    """``safety_filter="none"``: the decoded command as it is, and zero infos."""
+
+    def __init__(
+        self, config: Any, agent_uavs: np.ndarray, num_swarms: int, partner_uavs: Any = None
+    ) -> None:
+        self._shape = (int(num_swarms), int(np.size(agent_uavs)))
+
+    def apply(self, q, p, flock_acc, u, grid=None) -> np.ndarray:
+        return u
+
+    def info(self, reset: bool = False) -> dict[str, np.ndarray]:
+        shape = self._shape
+        return {
+            "safety_active": np.zeros(shape, bool),
+            "safety_correction": np.zeros(shape),
+            "safety_infeasible": np.zeros(shape, bool),
+        }
+
+
+class CBFStage(NoFilterStage):
+    """``safety_filter="cbf"``: stage 2b of a core step (between decoding and the desired
+    acceleration), the braking-distance CBF filter on every paired UAV.
 
     Args:
         config: the env config (section ``safety``; ``pair_accel_limit``, ``dt``, ...).
@@ -43,16 +65,11 @@ class SafetyStage:
         num_swarms: int,
         partner_uavs: np.ndarray | None = None,
     ) -> None:
-        self.enabled = config.safety_filter == "cbf"
-        B, M = int(num_swarms), int(np.size(agent_uavs))
+        super().__init__(config, agent_uavs, num_swarms)
         self.agent_uavs = np.asarray(agent_uavs, dtype=np.int64)
-        self.filter: SafetyFilter | None = None
-        self.output: SafetyOutput | None = None
-        if self.enabled:
-            params = SafetyParams.from_config(config)
-            self.filter = SafetyFilter(params, self.agent_uavs, config.n_uavs, partner_uavs)
-            self.output = self.filter.allocate(B, config.dim)
-        self._shape = (B, M)
+        params = SafetyParams.from_config(config)
+        self.filter = SafetyFilter(params, self.agent_uavs, config.n_uavs, partner_uavs)
+        self.output: SafetyOutput = self.filter.allocate(int(num_swarms), config.dim)
 
     def apply(
         self,
@@ -61,9 +78,8 @@ class SafetyStage:
         flock_acc: np.ndarray,
         u: np.ndarray,
         grid: NeighborGrid | None = None,
-    ):
-        """The pair command to apply (B, M, dim): ``u`` itself when the filter is off, else
-        a new array with each agent's filtered command.
+    ) -> np.ndarray:
+        """A new array (B, M, dim) with each agent's filtered command.
 
         Args:
             q: positions of all UAVs (B, N, dim), m.
@@ -74,19 +90,15 @@ class SafetyStage:
             grid: the core's neighbour grid of this state, if it has one (the filter then
                 looks up each agent's candidates in it; the result is the same).
         """
-        if not self.enabled:
-            return u
         out = self.filter.apply(q, p, flock_acc[:, self.agent_uavs], u, self.output, grid)
         return out.u.copy()
 
-    def info(self, reset: bool = False) -> dict[str, np.ndarray] | None:
-        """The per-agent infos of the last step (fresh arrays, ``SAFETY_INFO_KEYS``): whether
-        the filter changed the command for safety, the size of the change (m/s^2) and
-        whether no command within the bound met every constraint. None when the filter is
-        off or at a reset (nothing was filtered): :func:`~pairflock_env.task.infos.make_info`
-        then reports zeros / False."""
-        if not self.enabled or reset:
-            return None
+    def info(self, reset: bool = False) -> dict[str, np.ndarray]:
+        """The per-agent infos of the last step (fresh arrays): whether the filter changed
+        the command for safety, the size of the change (m/s^2) and whether no command within
+        the bound met every constraint; zeros at a reset (nothing was filtered)."""
+        if reset:
+            return super().info()
         o = self.output
         return {
             "safety_active": o.active.copy(),

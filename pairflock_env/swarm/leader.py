@@ -3,24 +3,28 @@
 A trajectory is any object with ``state(t) -> (q, p)`` where ``t`` has shape (B,) (the sim
 time of each swarm) and ``q``, ``p`` have shape (B, dim). Trajectories are pure functions of
 time, so a batch of swarms at different times (after auto-resets) is handled naturally.
-New trajectory types register in :data:`LEADERS` and are picked by ``config.leader``.
+A trajectory type is a :class:`Leader` entry of :data:`LEADERS`, picked by ``config.leader``
+(docs/extending.md).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from numba import njit
 
 from pairflock_env.config import PairFlockConfig
+from pairflock_env.config.registry import LEADERS, Plugin
 
 __all__ = [
     "LEADERS",
     "ClimbAndTurnLeader",
     "ConstantVelocityLeader",
+    "Leader",
     "LeaderTrajectory",
     "make_leader",
 ]
@@ -232,19 +236,55 @@ class ClimbAndTurnLeader:
         return q, p
 
 
-LEADERS: dict[str, Callable[[PairFlockConfig], LeaderTrajectory]] = {
-    "constant_velocity": lambda cfg: ConstantVelocityLeader(
-        cfg.vector("leader_position"), cfg.vector("leader_velocity")
-    ),
-    "climb_and_turn": lambda cfg: ClimbAndTurnLeader(
-        cfg.vector("leader_position"),
-        cfg.vector("leader_velocity"),
-        turns=[(t0, dur, np.radians(ang)) for t0, dur, ang in cfg.leader_turns],
-        climb_time=cfg.leader_climb_time,
-        level_time=cfg.leader_level_time,
-    ),
-}
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Leader(Plugin):
+    """A registered leader trajectory.
+
+    Attributes (besides :class:`~pairflock_env.config.registry.Plugin`'s):
+        trajectory: builds it for a config, ``trajectory(config) -> LeaderTrajectory``.
+        speed_bound: per-axis bound (dim,) of |leader velocity| over any episode of a
+            config; the views' observation bounds follow from it.
+    """
+
+    trajectory: Callable[[Any], LeaderTrajectory]
+    speed_bound: Callable[[Any], np.ndarray]
+
+
+def _climb_turn_speed(cfg: Any) -> np.ndarray:
+    """The horizontal speed on every horizontal axis (turns rotate it), the climb rate up."""
+    v0 = cfg.vector("leader_velocity")
+    vmax = np.full(cfg.dim, float(np.hypot(v0[0], v0[1])))
+    if cfg.dim == 3:
+        vmax[2] = abs(v0[2])
+    return vmax
 
 
 def make_leader(config: PairFlockConfig) -> LeaderTrajectory:
-    return LEADERS[config.leader](config)
+    """The leader trajectory ``config.leader``."""
+    return LEADERS[config.leader].trajectory(config)
+
+
+LEADERS.register(
+    Leader(
+        name="constant_velocity",
+        doc="q(t) = q0 + v t (Sec. VI-A)",
+        trajectory=lambda cfg: ConstantVelocityLeader(
+            cfg.vector("leader_position"), cfg.vector("leader_velocity")
+        ),
+        speed_bound=lambda cfg: np.abs(cfg.vector("leader_velocity")),
+    )
+)
+LEADERS.register(
+    Leader(
+        name="climb_and_turn",
+        doc="climb, level off, turn at constant ground speed (Sec. VI-B)",
+        trajectory=lambda cfg: ClimbAndTurnLeader(
+            cfg.vector("leader_position"),
+            cfg.vector("leader_velocity"),
+            turns=[(t0, dur, np.radians(ang)) for t0, dur, ang in cfg.leader_turns],
+            climb_time=cfg.leader_climb_time,
+            level_time=cfg.leader_level_time,
+        ),
+        speed_bound=_climb_turn_speed,
+    )
+)

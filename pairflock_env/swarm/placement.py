@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig, corner_diagonals
+from pairflock_env.config.arrays import real_array
 from pairflock_env.swarm.grid import nearest_indices
 from pairflock_env.swarm.spacing import redraw_conflicts
 
@@ -113,44 +114,45 @@ def pinning_mask(cfg: PairFlockConfig, q: np.ndarray, leader_q: np.ndarray) -> n
 
 
 def check_reset_options(
-    options: Mapping[str, Any] | None, n_rows: int, n_uavs: int, dim: int
+    options: Mapping[str, Any] | None, n_rows: int, n_uavs: int, dim: int, name: str = "options"
 ) -> tuple[np.ndarray | None, np.ndarray | None]:
     """Validated ``positions`` and ``velocities`` of reset options, each (n_rows, N, dim) or
-    ``None`` when not given.
+    ``None`` when not given: the one check of reset options, for every view.
 
-    Raises ``TypeError`` (options not a dict, values not numeric) or ``ValueError`` (a wrong
-    shape, NaN or inf); unknown keys are ignored with a warning.
+    Values go through the same check as actions
+    (:func:`~pairflock_env.task.actions.real_array`): real numbers only (no bools, complex
+    numbers, strings or masked entries), finite. Raises ``TypeError`` (options not a dict,
+    values not real numbers) or ``ValueError`` (a wrong shape, masked entries, NaN or inf),
+    naming ``name``; unknown keys are ignored with a warning.
     """
     if options is None:
         return None, None
     if not isinstance(options, Mapping):
-        raise TypeError(f"options={options!r} is invalid: must be a dict or None")
+        raise TypeError(f"{name}={options!r} is invalid: must be a dict or None")
     unknown = [k for k in options if k not in RESET_OPTIONS]
     if unknown:
         warnings.warn(
             f"ignoring unknown reset options {unknown}; known: {list(RESET_OPTIONS)}",
             stacklevel=3,
         )
-    q0 = _state_option(options, "positions", n_rows, n_uavs, dim)
-    p0 = _state_option(options, "velocities", n_rows, n_uavs, dim)
+    q0 = _state_option(options, "positions", n_rows, n_uavs, dim, name)
+    p0 = _state_option(options, "velocities", n_rows, n_uavs, dim, name)
     return q0, p0
 
 
 def _state_option(
-    options: Mapping[str, Any], key: str, n_rows: int, N: int, D: int
+    options: Mapping[str, Any], key: str, n_rows: int, N: int, D: int, name: str
 ) -> np.ndarray | None:
     if key not in options or options[key] is None:
         return None
-    try:
-        arr = np.asarray(options[key], dtype=np.float64)
-    except (TypeError, ValueError):
-        raise TypeError(f"options[{key!r}] must be a numeric array") from None
+    what = f"{name}[{key!r}]"
+    arr = real_array(options[key], what)
     if arr.shape == (N, D):
         arr = np.broadcast_to(arr, (n_rows, N, D))
     if arr.shape != (n_rows, N, D):
         raise ValueError(
-            f"options[{key!r}] has shape {arr.shape}, expected ({N}, {D}) or ({n_rows}, {N}, {D})"
+            f"{what} has shape {arr.shape}, expected ({N}, {D}) or ({n_rows}, {N}, {D})"
         )
     if not np.all(np.isfinite(arr)):
-        raise ValueError(f"options[{key!r}] contains NaN or inf")
+        raise ValueError(f"{what} contains NaN or inf")
     return arr

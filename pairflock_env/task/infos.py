@@ -20,46 +20,38 @@ import numpy as np
 
 __all__ = [
     "AGENT_INFO_KEYS",
+    "COMMAND_INFO_KEYS",
+    "FLOCK_INFO_KEYS",
     "LIVE_INFO_KEYS",
+    "PAIR_INFO_KEYS",
+    "SAFETY_INFO_KEYS",
     "SWARM_INFO_KEYS",
     "StepResult",
     "hold_last_finite",
     "make_info",
 ]
 
-#: per-agent info arrays, shape (B, M)
-AGENT_INFO_KEYS = (
+#: the pair quantities of every agent, (B, M), as the neighbour pass gives them
+PAIR_INFO_KEYS = (
     "pair_distance",
     "pair_error",
     "sliding_surface",
     "min_separation",
     "shared_neighbors",
-    "pair_accel",
-    "action_clipped",
-    "safety_active",
-    "safety_correction",
-    "safety_infeasible",
 )
+#: what the step did to each agent's command, (B, M)
+COMMAND_INFO_KEYS = ("pair_accel", "action_clipped")
+#: per-agent infos of the safety stage, (B, M) (every filter reports these)
+SAFETY_INFO_KEYS = ("safety_active", "safety_correction", "safety_infeasible")
+#: per-agent info arrays, shape (B, M)
+AGENT_INFO_KEYS = (*PAIR_INFO_KEYS, *COMMAND_INFO_KEYS, *SAFETY_INFO_KEYS)
+#: the flocking pass's per-swarm quantities, (B,)
+FLOCK_INFO_KEYS = ("collisions", "largest_component", "velocity_mismatch", "velocity_mismatch_max")
 #: per-swarm info arrays, shape (B,)
-SWARM_INFO_KEYS = (
-    "sim_time",
-    "collisions",
-    "largest_component",
-    "velocity_mismatch",
-    "velocity_mismatch_max",
-    "diverged",
-)
+SWARM_INFO_KEYS = ("sim_time", *FLOCK_INFO_KEYS, "diverged")
 #: infos that describe the step itself (clock, applied command, flag), not the state: always
 #: current, also for a diverged swarm
-LIVE_INFO_KEYS = (
-    "pair_accel",
-    "action_clipped",
-    "safety_active",
-    "safety_correction",
-    "safety_infeasible",
-    "sim_time",
-    "diverged",
-)
+LIVE_INFO_KEYS = (*COMMAND_INFO_KEYS, *SAFETY_INFO_KEYS, "sim_time", "diverged")
 
 
 @dataclasses.dataclass
@@ -90,27 +82,23 @@ def make_info(
     sim_time: np.ndarray,
     diverged: np.ndarray,
     terms: Mapping[str, np.ndarray],
-    safety: Mapping[str, np.ndarray] | None = None,
+    safety: Mapping[str, np.ndarray],
 ) -> dict[str, np.ndarray]:
     """The core's infos of one step (fresh arrays; see the module docstring).
 
     Args:
-        pair: the agents' pair quantities ``pair_distance``, ``pair_error``,
-            ``sliding_surface``, ``min_separation``, ``shared_neighbors`` (B, M).
-        flock: the flocking pass's outputs (``collisions``, ``largest_component``,
-            ``velocity_mismatch``, ``velocity_mismatch_max``, (B,)); copied.
+        pair: the agents' pair quantities ``PAIR_INFO_KEYS`` (B, M).
+        flock: the flocking pass's outputs, ``FLOCK_INFO_KEYS`` (B,); copied.
         u: the applied pair command (B, M, dim), m/s^2; clipped: (B, M) bool.
         sim_time: (B,) s (copied); diverged: (B,) bool; terms: reward terms (B, M).
-        safety: the safety stage's ``safety_active``, ``safety_correction`` and
-            ``safety_infeasible`` (B, M); zeros / False when None (no filter).
+        safety: the safety stage's infos (``SAFETY_INFO_KEYS`` (B, M) and any of its own).
     """
-    info = {k: pair[k] for k in AGENT_INFO_KEYS[:5]}
+    info = {k: pair[k] for k in PAIR_INFO_KEYS}
     info["pair_accel"] = np.sqrt(np.einsum("bmk,bmk->bm", u, u))
     info["action_clipped"] = clipped
-    for k, dtype in zip(AGENT_INFO_KEYS[7:], (bool, np.float64, bool), strict=True):
-        info[k] = np.zeros(clipped.shape, dtype) if safety is None else safety[k]
+    info.update(safety)
     info["sim_time"] = sim_time.copy()
-    for k in SWARM_INFO_KEYS[1:5]:
+    for k in FLOCK_INFO_KEYS:
         info[k] = flock[k].copy()
     info["diverged"] = diverged
     for k, v in terms.items():

@@ -1,4 +1,4 @@
-"""The named observation layout of a paired UAV (an agent).
+"""The named observation layout of a paired UAV (an agent), and the observation-field seam.
 
 Each agent sees a flat float32 vector. Its layout is a contract: controllers and policies read
 it by name through :class:`ObsLayout` (``layout.get(obs, "partner_offset")``), never by
@@ -6,82 +6,127 @@ index, and the documentation table is generated from the same object
 (``layout.markdown_table()``), so code and docs cannot drift apart.
 
 Values are physical (SI units, world frame, relative to the observing UAV), so the analytic
-controllers of the paper read them directly; learning views may rescale them on top.
+controllers of the paper read them directly; learning views may rescale them on top. More
+fields are :class:`ObservationField` entries of :data:`OBSERVATIONS`, appended after the
+built-in ones for the names a config lists in ``obs_extra`` (docs/extending.md).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
-__all__ = ["ObsField", "ObsLayout", "add_sensor_noise", "build_observation"]
+from pairflock_env.config.registry import OBSERVATIONS, Plugin
+from pairflock_env.layout import Field as LayoutField
+from pairflock_env.layout import FlatLayout
+
+__all__ = [
+    "OBSERVATIONS",
+    "ObsLayout",
+    "ObservationContext",
+    "ObservationField",
+    "add_sensor_noise",
+]
 
 #: largest float32: noisy observations saturate here instead of overflowing to inf
 _F32_MAX = float(np.finfo(np.float32).max)
 
 
 @dataclasses.dataclass(frozen=True)
-class ObsField:
-    """One named field of the observation: its shape, unit and meaning."""
+class ObservationContext:
+    """What an :class:`ObservationField` computes its value from: the true state after a
+    step (arrays with leading axis B; M agents)."""
 
-    name: str
-    shape: tuple[int, ...]
+    config: Any
+    q: np.ndarray
+    """positions of every UAV (B, N, dim), m"""
+    p: np.ndarray
+    """velocities (B, N, dim), m/s"""
+    t: np.ndarray
+    """sim time (B,), s"""
+    leader_q: np.ndarray
+    """leader position (B, dim), m"""
+    leader_p: np.ndarray
+    """leader velocity (B, dim), m/s"""
+    agent_uavs: np.ndarray
+    """UAV index of each agent (M,)"""
+    partner_uavs: np.ndarray
+    """UAV index of each agent's partner (M,)"""
+    flock_accel: np.ndarray
+    """every UAV's flocking command (B, N, dim), m/s^2"""
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class ObservationField(Plugin):
+    """A registered observation field.
+
+    Attributes (besides :class:`~pairflock_env.config.registry.Plugin`'s):
+        shape: its shape for (dim, obs_neighbors), e.g. ``lambda dim, k: (dim,)``.
+        unit: its unit, for the docs table.
+        value: its value ``value(ctx) -> (B, M, *shape)`` from an :class:`ObservationContext`.
+        bound: a bound on |value| for a config (every entry; the views' observation space).
+    """
+
+    shape: Callable[[int, int], tuple[int, ...]]
     unit: str
-    description: str
+    value: Callable[[ObservationContext], np.ndarray]
+    bound: Callable[[Any], float]
 
-    @property
-    def size(self) -> int:
-        """Number of values of the field in the flat observation."""
-        return math.prod(self.shape)
+    def size(self, dim: int, n_neighbors: int) -> int:
+        return math.prod(self.shape(dim, n_neighbors))
+
+    def layout_field(self, dim: int, n_neighbors: int) -> LayoutField:
+        return LayoutField(self.name, tuple(self.shape(dim, n_neighbors)), self.unit, self.doc)
 
 
-def _all_fields(D: int, K: int) -> list[ObsField]:
+def _builtin_fields(D: int, K: int) -> list[LayoutField]:
     """Every field of the layout for dim D and K neighbour slots (some may have size 0)."""
     return [
-        ObsField(
+        LayoutField(
             "partner_offset",
             (D,),
             "m",
             "q_partner - q_self (y of eq. 21 for UAV A, -y for UAV B)",
         ),
-        ObsField(
+        LayoutField(
             "partner_velocity",
             (D,),
             "m/s",
             "p_partner - p_self (y' of eq. 22 for A, -y' for B)",
         ),
-        ObsField("target_distance", (1,), "m", "d_m of this pair"),
-        ObsField(
+        LayoutField("target_distance", (1,), "m", "d_m of this pair"),
+        LayoutField(
             "shared_neighbors",
             (1,),
             "count",
             "N of eq. 28: neighbours shared by the pair, +2 if A and B are neighbours",
         ),
-        ObsField("leader_offset", (D,), "m", "q_leader - q_self"),
-        ObsField("leader_velocity", (D,), "m/s", "p_leader - p_self"),
-        ObsField(
+        LayoutField("leader_offset", (D,), "m", "q_leader - q_self"),
+        LayoutField("leader_velocity", (D,), "m/s", "p_leader - p_self"),
+        LayoutField(
             "flock_accel",
             (D,),
             "m/s^2",
             "own flocking command f^g + f^v + h f^gamma this control period",
         ),
-        ObsField(
+        LayoutField(
             "partner_flock_accel",
             (D,),
             "m/s^2",
             "the partner's flocking command this control period",
         ),
-        ObsField(
+        LayoutField(
             "neighbor_offsets",
             (K, D),
             "m",
             "q_j - q_self of the K nearest non-partner UAVs, nearest first",
         ),
-        ObsField("neighbor_velocities", (K, D), "m/s", "p_j - p_self of the same UAVs"),
-        ObsField(
+        LayoutField("neighbor_velocities", (K, D), "m/s", "p_j - p_self of the same UAVs"),
+        LayoutField(
             "neighbor_mask",
             (K,),
             "0/1",
@@ -90,87 +135,24 @@ def _all_fields(D: int, K: int) -> list[ObsField]:
     ]
 
 
-class ObsLayout:
-    """Ordered named fields of the per-agent observation for a given ``dim`` and K."""
+class ObsLayout(FlatLayout):
+    """Ordered named fields of the per-agent observation for a given ``dim``, K and extra
+    (registered) fields."""
 
-    def __init__(self, dim: int, n_neighbors: int) -> None:
+    def __init__(self, dim: int, n_neighbors: int, extra: tuple[str, ...] = ()) -> None:
         self.dim = dim
         self.n_neighbors = n_neighbors
-        fields = _all_fields(dim, n_neighbors)
-        self.fields: tuple[ObsField, ...] = tuple(f for f in fields if f.size > 0)
-        self._slices: dict[str, slice] = {}
-        offset = 0
-        for f in self.fields:
-            self._slices[f.name] = slice(offset, offset + f.size)
-            offset += f.size
-        self.size = offset
-        self._by_name = {f.name: f for f in self.fields}
-        # what build_observation needs per field, resolved once
-        self._plan = tuple((f.name, self._slices[f.name], f.size) for f in self.fields)
+        self.extra = tuple(extra)
+        more = [OBSERVATIONS[name].layout_field(dim, n_neighbors) for name in self.extra]
+        super().__init__([*_builtin_fields(dim, n_neighbors), *more], "observation")
 
-    def __iter__(self) -> Iterator[ObsField]:
-        return iter(self.fields)
+    @classmethod
+    def for_config(cls, config: Any) -> ObsLayout:
+        """The layout of ``config``'s observation (``dim``, ``obs_neighbors``, ``obs_extra``)."""
+        return cls(config.dim, config.obs_neighbors, config.obs_extra)
 
-    def __contains__(self, name: str) -> bool:
-        return name in self._slices
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        return tuple(self._slices)
-
-    def slice(self, name: str) -> slice:
-        try:
-            return self._slices[name]
-        except KeyError:
-            raise KeyError(
-                f"no observation field {name!r}; fields are {', '.join(self.names)}"
-            ) from None
-
-    def get(self, obs: np.ndarray, name: str) -> np.ndarray:
-        """The named field of ``obs`` (..., size) with its own shape: (..., *field.shape)."""
-        obs = np.asarray(obs)
-        if obs.shape[-1] != self.size:
-            raise ValueError(
-                f"observation has last dimension {obs.shape[-1]}, expected {self.size} "
-                f"(dim={self.dim}, obs_neighbors={self.n_neighbors})"
-            )
-        f = self._by_name.get(name) or self.slice(name)  # raises KeyError with names
-        return obs[..., self._slices[name]].reshape(obs.shape[:-1] + f.shape)
-
-    def markdown_table(self) -> str:
-        rows = ["| slice | field | shape | unit | meaning |", "|---|---|---|---|---|"]
-        for f in self.fields:
-            s = self._slices[f.name]
-            rows.append(
-                f"| {s.start}:{s.stop} | `{f.name}` | {f.shape} | {f.unit} | {f.description} |"
-            )
-        return "\n".join(rows)
-
-
-def build_observation(
-    layout: ObsLayout, batch: tuple[int, int], fields: Mapping[str, np.ndarray]
-) -> np.ndarray:
-    """The observation (B, M, layout.size) float32, filled field by field by name.
-
-    Args:
-        layout: the layout to fill.
-        batch: (B, M).
-        fields: an array per field of the layout, shaped (B, M, *field.shape) or broadcastable
-            to it with its own leading axes (e.g. (1, M, 1) for one value per agent); names
-            that the layout does not hold (fields of size 0) are ignored.
-
-    Raises:
-        KeyError: a field of the layout is missing from ``fields``.
-    """
-    B, M = batch
-    obs = np.empty((B, M, layout.size), np.float32)
-    for name, sl, size in layout._plan:
-        try:
-            v = fields[name]
-        except KeyError:
-            raise KeyError(f"no values for observation field {name!r}") from None
-        obs[:, :, sl] = v if v.ndim == 3 else v.reshape((*v.shape[:2], size))  # not [...]: faster
-    return obs
+    def _size_hint(self) -> str:
+        return f" (dim={self.dim}, obs_neighbors={self.n_neighbors})"
 
 
 def add_sensor_noise(clean: np.ndarray, noise: np.ndarray) -> np.ndarray:

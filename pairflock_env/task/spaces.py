@@ -24,12 +24,13 @@ bounds for the fields it enters.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig
-from pairflock_env.task.observations import ObsLayout
+from pairflock_env.layout import Field as LayoutField
+from pairflock_env.layout import FlatLayout
+from pairflock_env.swarm.leader import LEADERS
+from pairflock_env.task.observations import OBSERVATIONS, ObsLayout
 from pairflock_env.task.rewards import DIVERGENCE_PENALTY
 
 __all__ = [
@@ -56,18 +57,10 @@ def _episode_time(cfg: PairFlockConfig) -> float:
 
 
 def leader_bounds(cfg: PairFlockConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Per-axis bounds (dim,) of |leader position| and |leader velocity| over an episode."""
+    """Per-axis bounds (dim,) of |leader position| and |leader velocity| over an episode
+    (the speed bound is the leader entry's, :class:`~pairflock_env.swarm.leader.Leader`)."""
     q0 = np.abs(cfg.vector("leader_position"))
-    v0 = cfg.vector("leader_velocity")
-    if cfg.leader == "constant_velocity":
-        vmax = np.abs(v0)
-    elif cfg.leader == "climb_and_turn":
-        vmax = np.full(cfg.dim, float(np.hypot(v0[0], v0[1])))
-        if cfg.dim == 3:
-            vmax[2] = abs(v0[2])
-    else:  # a trajectory registered elsewhere: nothing is known about it
-        inf = np.full(cfg.dim, np.inf)
-        return inf, inf
+    vmax = np.asarray(LEADERS[cfg.leader].speed_bound(cfg), dtype=np.float64)
     return q0 + vmax * _episode_time(cfg), vmax
 
 
@@ -91,7 +84,7 @@ def _f32(low: np.ndarray, high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def physical_observation_bounds(cfg: PairFlockConfig) -> tuple[np.ndarray, np.ndarray]:
     """(low, high), each float32 (obs_size,), of every physical observation of ``cfg``."""
-    layout = ObsLayout(cfg.dim, cfg.obs_neighbors)
+    layout = ObsLayout.for_config(cfg)
     L, D, K = cfg.divergence_limit, cfg.dim, cfg.obs_neighbors
     lq, lp = leader_bounds(cfg)
     acc = _flock_accel_bound(cfg, lq, lp)
@@ -113,6 +106,10 @@ def physical_observation_bounds(cfg: PairFlockConfig) -> tuple[np.ndarray, np.nd
     low["target_distance"] = np.zeros(1)  # not [d_m, d_m]: a degenerate box trips checkers
     low["shared_neighbors"] = np.zeros(1)
     low["neighbor_mask"] = np.zeros(K)
+    for name in cfg.obs_extra:
+        entry = OBSERVATIONS[name]
+        b = np.full(entry.size(D, K), float(entry.bound(cfg)))
+        high[name], low[name] = b, -b
     lo = np.empty(layout.size)
     hi = np.empty(layout.size)
     for name in layout.names:
@@ -149,19 +146,7 @@ def core_reward_range(cfg: PairFlockConfig) -> tuple[float, float]:
     return -max(worst * (1 + _SLACK), DIVERGENCE_PENALTY), 0.0
 
 
-@dataclasses.dataclass(frozen=True)
-class _StateField:
-    name: str
-    shape: tuple[int, ...]
-    unit: str
-    description: str
-
-    @property
-    def size(self) -> int:
-        return int(np.prod(self.shape))
-
-
-class StateLayout:
+class StateLayout(FlatLayout):
     """Named fields of the global state of one swarm (``env.state()``), float32.
 
     Positions and velocities are relative to the virtual leader (the dynamics do not depend
@@ -172,43 +157,13 @@ class StateLayout:
 
     def __init__(self, n_uavs: int, dim: int) -> None:
         N, D = n_uavs, dim
-        self.fields = (
-            _StateField("positions", (N, D), "m", "q_i - q_leader of every UAV i, row by row"),
-            _StateField("velocities", (N, D), "m/s", "p_i - p_leader of every UAV i"),
-            _StateField("leader_velocity", (D,), "m/s", "p_leader"),
-            _StateField("time_fraction", (1,), "1", "sim time / episode length, in [0, 1]"),
+        fields = (
+            LayoutField("positions", (N, D), "m", "q_i - q_leader of every UAV i, row by row"),
+            LayoutField("velocities", (N, D), "m/s", "p_i - p_leader of every UAV i"),
+            LayoutField("leader_velocity", (D,), "m/s", "p_leader"),
+            LayoutField("time_fraction", (1,), "1", "sim time / episode length, in [0, 1]"),
         )
-        self._slices: dict[str, slice] = {}
-        k = 0
-        for f in self.fields:
-            self._slices[f.name] = slice(k, k + f.size)
-            k += f.size
-        self.size = k
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        return tuple(self._slices)
-
-    def slice(self, name: str) -> slice:
-        if name not in self._slices:
-            raise KeyError(f"no state field {name!r}; fields are {', '.join(self.names)}")
-        return self._slices[name]
-
-    def get(self, state: np.ndarray, name: str) -> np.ndarray:
-        """The named field of ``state`` (..., size), shaped (..., *field.shape)."""
-        sl = self.slice(name)
-        shape = next(f.shape for f in self.fields if f.name == name)
-        state = np.asarray(state)
-        return state[..., sl].reshape(state.shape[:-1] + shape)
-
-    def markdown_table(self) -> str:
-        rows = ["| slice | field | shape | unit | meaning |", "|---|---|---|---|---|"]
-        for f in self.fields:
-            s = self._slices[f.name]
-            rows.append(
-                f"| {s.start}:{s.stop} | `{f.name}` | {f.shape} | {f.unit} | {f.description} |"
-            )
-        return "\n".join(rows)
+        super().__init__(fields, "state")
 
 
 def state_bounds(cfg: PairFlockConfig) -> tuple[np.ndarray, np.ndarray]:

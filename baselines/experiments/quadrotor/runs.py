@@ -119,11 +119,11 @@ class _Recorder:
         d2[:, np.arange(N), np.arange(N)] = np.inf
         self.min_distance[live, k] = np.sqrt(d2.min(axis=(1, 2)))[live]
         self.velocity_mismatch[live, k] = res.info["velocity_mismatch_max"][live]
-        if core.safety.enabled:
+        if core.config.safety_filter != "none":
             if self.filter_active is None:
                 self.filter_active = np.zeros(self.min_distance.shape, bool)
             if k > 0:
-                self.filter_active[live, k] = core.safety.output.active[live].any(axis=1)
+                self.filter_active[live, k] = res.info["safety_active"][live].any(axis=1)
         lq, _ = core.leader_state()
         mid = 0.5 * (q[:, self.pair[0]] + q[:, self.pair[1]])
         self.pair_offset[live, k] = np.linalg.norm(mid - lq, axis=-1)[live]

@@ -1,25 +1,44 @@
-"""The sections of :class:`~pairflock_env.config.PairFlockConfig`, one module per topic.
+"""The sections of :class:`~pairflock_env.config.PairFlockConfig`, one module per section,
+named after it (``quadrotor`` is the quadrotor vehicle model's own section).
 
 The order of :data:`SECTIONS` is the order of the docs tables and of ``to_dict``; rules and
-derived quantities are checked as soon as their fields are.
+derived quantities are checked as soon as their fields are. Plug-ins add their own sections
+when they register (:mod:`pairflock_env.config.registry`).
 """
 
 from __future__ import annotations
 
 from pairflock_env.config.sections import (
     flocking,
+    initial_state,
     leader,
-    pairs,
+    meta,
+    observation,
+    pair_task,
     quadrotor,
     reward,
+    robustness,
     safety,
-    sensing,
     swarm,
+    timing,
 )
 
 __all__ = ["DERIVED", "RULES", "SECTIONS"]
 
-_MODULES = (swarm, flocking, leader, pairs, reward, sensing, quadrotor, safety)
+_MODULES = (
+    meta,
+    swarm,
+    timing,
+    flocking,
+    leader,
+    pair_task,
+    initial_state,
+    reward,
+    observation,
+    robustness,
+    quadrotor,
+    safety,
+)
 
 SECTIONS = tuple(s for m in _MODULES for s in m.SECTIONS)
 RULES = tuple(r for m in _MODULES for r in getattr(m, "RULES", ()))

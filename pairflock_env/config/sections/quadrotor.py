@@ -12,13 +12,52 @@ import math
 from typing import Any
 
 from pairflock_env.config.fields import Choice, Field, OrNone, Real, Vector
-from pairflock_env.config.limits import MAX_POSITION, MAX_SUBSTEPS
+from pairflock_env.config.limits import MAX_POSITION, MAX_REACTION_TIME, MAX_SUBSTEPS
 from pairflock_env.config.schema import Derived, Rule, Section
-from pairflock_env.config.sections.swarm import attitude_rate, physics_dt
+from pairflock_env.config.sections.timing import physics_dt
 
-__all__ = ["DERIVED", "RULES", "SECTIONS"]
+__all__ = [
+    "DERIVED",
+    "RULES",
+    "SECTIONS",
+    "accel_bound",
+    "attitude_rate",
+    "min_substeps",
+    "reaction_time",
+]
 
 _FREQ = Real(1e-2, 1e4)
+
+#: the safety filter counts on braking only after this many attitude-loop time constants
+#: (1 / quad_attitude_freq): 0.1 s at the default 15 rad/s, the only frequency it was
+#: measured at (docs/safety.md "Quadrotors")
+REACTION_CYCLES = 1.5
+
+
+def attitude_rate(v: Any) -> float:
+    """Fastest rate of the quadrotor attitude loop (rad/s): the explicit integration needs a
+    physics step of at most 0.1 / rate."""
+    return max(v.quad_attitude_freq, v.quad_yaw_freq) * max(1.0, 2 * v.quad_attitude_damping)
+
+
+def min_substeps(v: Any) -> int:
+    """Fewest substeps that resolve the quadrotor attitude loop at ``dt`` (capped at the
+    substeps limit; the rule then says what to change)."""
+    need = math.ceil(v.dt / (0.1 / attitude_rate(v)) - 1e-9)
+    return max(1, min(need, MAX_SUBSTEPS))
+
+
+def accel_bound(v: Any) -> float:
+    """The horizontal acceleration (m/s^2) a hovering quadrotor can realise:
+    min(``quad_accel_limit``, ``quad_gravity`` tan ``quad_tilt_limit``), the smaller of its
+    command bound and its tilt cone (6 m/s^2 in the paper-quadrotor preset)."""
+    tilt = math.radians(v.quad_tilt_limit)
+    return min(v.quad_accel_limit, v.quad_gravity * math.tan(tilt))
+
+
+def reaction_time(v: Any) -> float:
+    """How late the quadrotor realises a command (s): REACTION_CYCLES / quad_attitude_freq."""
+    return REACTION_CYCLES / v.quad_attitude_freq
 
 
 def _hover_out_of_range(v: Any) -> str | None:
@@ -56,6 +95,19 @@ def _attitude_unresolved(v: Any) -> str | None:
         f"the physics step dt / substeps = {physics_dt(v):.4g} s is too coarse for the "
         f"quadrotor attitude loop, which must have a step <= {h_max:.4g} s = 0.1 / "
         f"{rate:g} rad/s; {fix}"
+    )
+
+
+def _reaction_time_too_long(v: Any) -> str | None:
+    """The filter's unset reaction time is this vehicle's lag, which must fit its field."""
+    if v.dynamics != "quadrotor" or v.safety_filter == "none" or v.safety_reaction_time is not None:
+        return None
+    tau = reaction_time(v)
+    if tau <= MAX_REACTION_TIME:
+        return None
+    return (
+        f"makes the unset safety_reaction_time {REACTION_CYCLES:g} / quad_attitude_freq = "
+        f"{tau:g} s, above the {MAX_REACTION_TIME:g} s it may be; set safety_reaction_time"
     )
 
 
@@ -211,6 +263,11 @@ RULES = (
         ),
         _attitude_unresolved,
         'dynamics="quadrotor": dt / substeps <= 0.1 / (max(wn, wn_yaw) max(1, 2 zeta))',
+    ),
+    Rule(
+        ("quad_attitude_freq", "safety_reaction_time", "safety_filter", "dynamics"),
+        _reaction_time_too_long,
+        "the quadrotor's derived safety_reaction_time (1.5 / quad_attitude_freq) <= 10 s",
     ),
 )
 

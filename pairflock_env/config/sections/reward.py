@@ -83,7 +83,6 @@ REWARD = Section(
             1.0,
             "m",
             "Separation D below which the separation penalty starts.",
-            aliases=("safe_distance",),
         ),
         Field(
             "collision_distance",

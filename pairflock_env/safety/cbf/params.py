@@ -1,143 +1,148 @@
-"""The safety filter's parameters: a small frozen object built from scalars."""
+"""The safety filter's parameters, declared like the env config's fields (one record, one
+validation, one table in docs/config.md)."""
 
 from __future__ import annotations
 
-import dataclasses
 import math
-import numbers
 from typing import Any
 
+from pairflock_env.config.fields import Auto, Choice, Field, Int, Real, fmt_num
+from pairflock_env.config.limits import MAX_GAIN, MAX_REACTION_TIME, MAX_SUBSTEPS
+from pairflock_env.config.schema import Record, Rule, Schema, Section, declare_record
 from pairflock_env.config.sections import safety as _section
 from pairflock_env.config.sections.safety import BRAKE_SHARE, DECAY, OTHER_SHARE, SENSING_RADIUS
 
-__all__ = ["INTEGRATORS", "SafetyParams"]
+__all__ = ["INTEGRATORS", "SAFETY_SCHEMA", "SafetyParams"]
 
 #: particle integrators the discrete-time barrier is derived for (see docs/safety.md)
 INTEGRATORS = ("semi_implicit", "exact")
 
+_ACCEL = Real(0.0, MAX_GAIN, lo_open=True)
+#: distances (m): any finite positive size a test or a large arena may need
+_DISTANCE = Real(0.0, 1e12, lo_open=True)
 
-def _real(name: str, v: Any) -> float:
-    if isinstance(v, bool) or not isinstance(v, numbers.Real):
-        raise TypeError(f"{name}={v!r} is invalid: must be a real number")
-    x = float(v)
-    if not math.isfinite(x):
-        raise ValueError(f"{name}={v!r} is invalid: must be finite")
-    return x
+_FIELDS = (
+    Field(
+        "accel_limit",
+        _ACCEL,
+        None,
+        "m/s^2",
+        "U: bound on the magnitude ||u|| of the filtered command (a ball, not a box); the "
+        "filter's output always satisfies it.",
+    ),
+    Field(
+        "safety_distance",
+        _DISTANCE,
+        1.0,
+        "m",
+        "D_s: the distance every filtering UAV keeps from every other UAV.",
+    ),
+    Field(
+        "margin",
+        Real(0.0, 1e12),
+        0.01,
+        "m",
+        "delta: the barrier is built at barrier_distance = D_s + delta, a buffer against small "
+        "breaks of the assumptions (an unpaired UAV pushed harder than other_accel).",
+    ),
+    Field(
+        "brake_accel",
+        _ACCEL,
+        None,
+        "m/s^2",
+        "alpha: the line-of-sight deceleration a filtering UAV counts on from its own "
+        "acceleration when it has to brake; 0 < alpha <= accel_limit.",
+        auto=Auto(lambda v: BRAKE_SHARE * v.accel_limit, ("accel_limit",), "0.8 accel_limit"),
+    ),
+    Field(
+        "other_accel",
+        Real(0.0, MAX_GAIN),
+        None,
+        "m/s^2",
+        "A_o: assumed bound on an unfiltered UAV's acceleration towards the agent (n . a_j <= "
+        "A_o; for the exact integrator or substeps > 1 on its norm); 0 <= A_o < alpha.",
+        auto=Auto(lambda v: OTHER_SHARE * v.accel_limit, ("accel_limit",), "0.4 accel_limit"),
+    ),
+    Field(
+        "sensing_radius",
+        _DISTANCE,
+        SENSING_RADIUS,
+        "m",
+        "R_s: a UAV constrains itself against the UAVs closer than this (> D_s + delta) and "
+        "against its partner at any distance; radius condition (b) of docs/safety.md.",
+    ),
+    Field(
+        "reaction_time",
+        Real(0.0, MAX_REACTION_TIME),
+        0.0,
+        "s",
+        "tau: the barrier counts on braking only after coasting tau at the current range "
+        "rate (a vehicle that realises its command with a lag); the distance itself is "
+        "still constrained as with tau = 0.",
+    ),
+    Field(
+        "decay",
+        Real(0.0, 1.0, lo_open=True),
+        DECAY,
+        "1",
+        "lambda: the discrete barrier condition is H(k+1) >= (1 - lambda) H(k); 1 allows the "
+        "state onto the braking curve in one step.",
+    ),
+    Field("dt", Real(1e-6, 1.0), 0.01, "s", "T: control period the command is held over."),
+    Field(
+        "substeps",
+        Int(1, MAX_SUBSTEPS),
+        1,
+        "steps",
+        "Physics steps per control period of the semi-implicit Euler integrator.",
+    ),
+    Field("integrator", Choice(INTEGRATORS), "semi_implicit", "", "The particle integrator."),
+)
 
 
-@dataclasses.dataclass(frozen=True)
-class SafetyParams:
-    """Parameters of the braking-distance CBF filter (units in each field's doc).
+def _brake_within(v: Any) -> str | None:
+    if not v.brake_accel <= v.accel_limit:
+        return f"must be in (0, accel_limit={fmt_num(v.accel_limit)}]"
+    return None
 
-    ``brake_accel`` and ``other_accel`` default to 0.8 and 0.4 of ``accel_limit``. Every
-    field is validated on construction (``TypeError`` for a non-number, ``ValueError`` for a
-    bad value); :meth:`from_config` takes ``accel_limit``, ``dt``, ``substeps`` and
-    ``integrator`` from an env config.
-    """
 
-    accel_limit: float
-    """U (m/s^2): bound on the magnitude ||u|| of the filtered pair command (a ball, not a
-    box); the filter's output always satisfies it."""
-    safety_distance: float = 1.0
-    """D_s (m): the distance every paired UAV keeps from every other UAV."""
-    margin: float = 0.01
-    """delta (m): the barrier is built at :attr:`barrier_distance` = D_s + delta, a buffer
-    against small breaks of the assumptions (an unpaired UAV pushed towards the agent
-    harder than ``other_accel``, docs/safety.md); >= 0."""
-    brake_accel: float | None = None
-    """alpha (m/s^2): the line-of-sight deceleration a paired UAV counts on from its own
-    acceleration f_i + u_i when it has to brake; 0 < alpha <= accel_limit. None: 0.8 U."""
-    other_accel: float | None = None
-    """A_o (m/s^2): assumed bound on an unpaired UAV's acceleration towards the agent
-    (n . a_j <= A_o; for ``integrator="exact"`` or ``substeps > 1`` on its norm);
-    0 <= A_o < alpha. None: 0.4 U."""
-    sensing_radius: float = SENSING_RADIUS
-    """R_s (m): an agent constrains itself against the UAVs closer than this (> D_s +
-    delta), and against its partner (``SafetyFilter(partners=...)``) at any distance. A UAV
-    closing at V is first sensed on the safe side if R_s >= :meth:`required_sensing_radius`
-    (V), the radius condition (b) of docs/safety.md."""
-    reaction_time: float = 0.0
-    """tau (s): the barrier counts on braking only after coasting tau at the current range
-    rate, E = d - D_s - delta + tau d' (a reaction-time braking distance, for a vehicle that
-    realises its command with a lag, e.g. the quadrotor's attitude loop); >= 0. The
-    distance itself is still constrained as with tau = 0."""
-    decay: float = DECAY
-    """lambda in (0, 1]: the discrete barrier condition is H(k+1) >= (1 - lambda) H(k);
-    1 allows the state onto the braking curve in one step, smaller values approach it
-    geometrically."""
-    dt: float = 0.01
-    """T (s): control period over which the command is held (zero-order hold)."""
-    substeps: int = 1
-    """Physics steps per control period of the semi-implicit Euler integrator."""
-    integrator: str = "semi_implicit"
-    """The env's particle integrator: ``"semi_implicit"`` or ``"exact"``."""
+def _other_below(v: Any) -> str | None:
+    if not v.other_accel < v.brake_accel:
+        return f"must be in [0, brake_accel={fmt_num(v.brake_accel)})"
+    return None
 
-    def __post_init__(self) -> None:
-        put = object.__setattr__
-        U = _real("accel_limit", self.accel_limit)
-        if U <= 0:
-            raise ValueError(f"accel_limit={self.accel_limit!r} is invalid: must be > 0")
-        put(self, "accel_limit", U)
-        for name in ("safety_distance", "dt"):
-            v = _real(name, getattr(self, name))
-            if v <= 0:
-                raise ValueError(f"{name}={getattr(self, name)!r} is invalid: must be > 0")
-            put(self, name, v)
-        a = BRAKE_SHARE * U if self.brake_accel is None else _real("brake_accel", self.brake_accel)
-        if not 0 < a <= U:
-            raise ValueError(
-                f"brake_accel={self.brake_accel!r} is invalid: must be in (0, accel_limit={U}]"
-            )
-        put(self, "brake_accel", a)
-        o = OTHER_SHARE * U if self.other_accel is None else _real("other_accel", self.other_accel)
-        if not 0 <= o < a:
-            raise ValueError(
-                f"other_accel={self.other_accel!r} is invalid: must be in [0, brake_accel={a})"
-            )
-        put(self, "other_accel", o)
-        m = _real("margin", self.margin)
-        if m < 0:
-            raise ValueError(f"margin={self.margin!r} is invalid: must be >= 0")
-        put(self, "margin", m)
-        r = _real("sensing_radius", self.sensing_radius)
-        if not r > self.safety_distance + m:
-            raise ValueError(
-                f"sensing_radius={self.sensing_radius!r} is invalid: must exceed "
-                f"safety_distance + margin = {self.safety_distance + m:g}"
-            )
-        put(self, "sensing_radius", r)
-        tau = _real("reaction_time", self.reaction_time)
-        if tau < 0:
-            raise ValueError(f"reaction_time={self.reaction_time!r} is invalid: must be >= 0")
-        put(self, "reaction_time", tau)
-        lam = _real("decay", self.decay)
-        if not 0 < lam <= 1:
-            raise ValueError(f"decay={self.decay!r} is invalid: must be in (0, 1]")
-        put(self, "decay", lam)
-        s = self.substeps
-        if isinstance(s, bool) or not isinstance(s, numbers.Integral):
-            raise TypeError(f"substeps={s!r} is invalid: must be an integer >= 1")
-        if int(s) < 1:
-            raise ValueError(f"substeps={s!r} is invalid: must be an integer >= 1")
-        put(self, "substeps", int(s))
-        if not isinstance(self.integrator, str) or self.integrator not in INTEGRATORS:
-            raise ValueError(
-                f"integrator={self.integrator!r} is invalid: must be one of {INTEGRATORS}"
-            )
+
+def _radius_beyond(v: Any) -> str | None:
+    if not v.sensing_radius > v.safety_distance + v.margin:
+        return f"must exceed safety_distance + margin = {v.safety_distance + v.margin:g}"
+    return None
+
+
+#: the declared parameters of :class:`SafetyParams`
+SAFETY_SCHEMA = Schema(
+    "safety parameter",
+    (Section("safety_params", "Safety filter parameters", "SafetyParams", _FIELDS),),
+    (
+        Rule(("brake_accel", "accel_limit"), _brake_within, "brake_accel <= accel_limit"),
+        Rule(("other_accel", "brake_accel"), _other_below, "other_accel < brake_accel"),
+        Rule(
+            ("sensing_radius", "safety_distance", "margin"),
+            _radius_beyond,
+            "sensing_radius > safety_distance + margin",
+        ),
+    ),
+)
+
+
+class _SafetyParamsMethods(Record):
+    """Derived quantities of :class:`SafetyParams`."""
 
     @classmethod
-    def from_config(cls, config: Any, **overrides: Any) -> SafetyParams:
+    def from_config(cls, config: Any, **overrides: Any) -> Any:
         """Parameters for an env config: ``accel_limit = pair_accel_limit``, the config's
-        ``dt``, ``substeps``, ``integrator`` and its ``safety_*`` fields (section ``safety``:
-        ``safety_distance``, ``safety_margin``, ``safety_brake_accel``,
-        ``safety_other_accel``, ``safety_sensing_radius`` (or the deprecated
-        ``safety_lookahead_range`` where that is larger), ``safety_reaction_time``,
-        ``safety_decay``). The unset (None) ones follow the
-        vehicle: the brake and other accelerations, the reaction time and the rate take the
-        section's defaults for ``config.dynamics`` (:func:`~pairflock_env.config.sections.
-        safety.brake_accel` and its siblings; on the quadrotor they depend on
-        ``quad_accel_limit`` and ``quad_attitude_freq``). Keyword ``overrides`` replace any
-        field."""
+        ``dt``, ``substeps``, ``integrator`` and its ``safety_*`` fields. The unset (None)
+        ones follow the vehicle model (:func:`~pairflock_env.config.sections.safety.
+        brake_accel` and its siblings). Keyword ``overrides`` replace any field."""
         kw: dict[str, Any] = dict(
             accel_limit=config.pair_accel_limit,
             dt=config.dt,
@@ -147,15 +152,11 @@ class SafetyParams:
             margin=config.safety_margin,
             brake_accel=_section.brake_accel(config),
             other_accel=_section.other_accel(config),
-            sensing_radius=_section.sensing_radius(config),
+            sensing_radius=config.safety_sensing_radius,
             reaction_time=_section.reaction_time(config),
             decay=_section.decay(config),
         )
-        names = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(overrides) - names)
-        if unknown:
-            raise TypeError(f"unknown safety parameter(s) {unknown}; valid: {sorted(names)}")
-        kw.update(overrides)
+        kw.update(cls.schema.resolve(overrides))
         return cls(**kw)
 
     @property
@@ -182,7 +183,23 @@ class SafetyParams:
         max(0, V - beta)^2 / (2 alpha_ij), beta = (c - 1/2) alpha_ij T (docs/safety.md).
         It concerns the UAVs other than the agent's partner, which the filter senses at any
         distance."""
-        v = _real("closing_speed", closing_speed)
+        v = Real(-math.inf, math.inf).check("closing_speed", closing_speed)
         a = self.barrier_accel(cooperative)
         x = max(0.0, v - (self.position_gain - 0.5) * a * self.dt)
         return self.barrier_distance + v * (self.dt + self.reaction_time) + x * x / (2.0 * a)
+
+
+SafetyParams = declare_record(
+    "SafetyParams",
+    SAFETY_SCHEMA,
+    _SafetyParamsMethods,
+    "pairflock_env.safety",
+    """Parameters of the braking-distance CBF filter (units and ranges: docs/config.md).
+
+    A frozen record with keyword-only construction, declared like the env config:
+    ``TypeError`` for an unknown name or a non-number, ``ValueError`` for a bad value, each
+    naming the parameter. ``brake_accel`` and ``other_accel`` default to 0.8 and 0.4 of
+    ``accel_limit``; :meth:`from_config` takes them, ``accel_limit``, ``dt``, ``substeps``
+    and ``integrator`` from an env config.
+    """,
+)
