@@ -83,7 +83,7 @@ def test_eval_targets_setting_is_validated_and_selects_the_score():
     from train.settings import RunSettings
 
     with pytest.raises(ValueError, match="eval_targets='strict' is invalid"):
-        RunSettings(eval_targets="strict", total_steps=64, eval_every=0).validate()
+        RunSettings(eval_targets="strict", total_steps=64, eval_every=0)
     s = RunSettings(eval_targets="generalist")
     summary = {
         "ss_error_median": 0.02,

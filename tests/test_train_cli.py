@@ -518,25 +518,22 @@ def test_values_are_read_as_written_by_the_train_cli(tmp_path):
     assert train(small, tmp_path / "lr", quiet=True).status == "completed"
 
 
-def test_old_interface_names_still_load(tmp_path):
-    """``frame``/``frame_params`` (settings files, RunSettings, --frame-param) are the old
-    names of ``interface``/``interface_params``; the committed model's metadata loads."""
+def test_only_stored_settings_keep_the_old_interface_names(tmp_path):
+    """``frame``/``frame_params``, the old names of ``interface``/``interface_params``, load
+    from stored data only (the committed models' metadata, through pairflock_env.compat);
+    settings files, keywords and flags take the current names."""
     from train.evaluate.cli import _task_overrides
-    from train.settings import RunSettings, load_yaml, settings_from_sources
+    from train.settings import RunSettings, load_yaml
 
     old = tmp_path / "old.yaml"
     old.write_text("frame: pair\nframe_params: {w_band: 0.2}\nenv: {n_uavs: 8}\n")
-    with pytest.warns(FutureWarning) as notes:
-        data = load_yaml(old)
-    assert {"'frame' is deprecated", "'frame_params' is deprecated"} <= {
-        str(n.message).split(": ", 1)[1].split(";")[0] for n in notes
-    }
-    assert data["interface"] == "pair" and data["interface_params"] == {"w_band": 0.2}
-    s = settings_from_sources(data, {"eval_baselines": []})
-    assert s.interface_params == {"w_band": 0.2}
-    with pytest.warns(DeprecationWarning, match="frame"):
-        assert RunSettings(frame="world").interface == "world"
-    with pytest.raises(ValueError, match="same setting"):
+    with pytest.raises(ValueError, match="unknown key 'frame'"):
+        load_yaml(old)
+    with pytest.raises(TypeError, match="'frame'"):
+        RunSettings(frame="world")
+    stored = RunSettings.from_dict({"frame": "world", "frame_params": {}, "eval_baselines": []})
+    assert stored.interface == "world" and "frame" not in stored.to_dict()
+    with pytest.raises(ValueError, match="both 'frame'"):
         RunSettings.from_dict({"frame": "pair", "interface": "world"})
     preset, over = _task_overrides(ROOT / "models" / "pair_n20_a50.zip")
     assert preset == "paper" and over["pair_accel_limit"] == 50.0

@@ -273,7 +273,7 @@ def test_best_model_is_chosen_on_the_aggregate_of_the_task_scores(how, best):
     from train.mix.evaluation import score_function
 
     s = _settings(eval_tasks=[{"n_uavs": 6, "name": "t0"}, {"n_uavs": 8, "name": "t1"}])
-    s.eval_aggregate = how
+    s = s.replace(eval_aggregate=how)
     scripted = iter([_summary([0.1, 5.0]), _summary([3.0, 3.0])])  # sum: first; worst: second
     kept = []
     cb = EvalCallback(

@@ -18,7 +18,7 @@ def _settings(**kw):
         eval_baselines=[],
         hyperparameters={"n_steps": 16, "batch_size": 32},
     )
-    return RunSettings(**{**base, **kw}).validate()
+    return RunSettings(**{**base, **kw})
 
 
 def test_init_model_copies_the_packaged_policys_weights():

@@ -13,12 +13,14 @@ import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 
+from baselines.evaluation.specs import parse_assignment
 from baselines.runtime.cli import ArgumentParser, int_like, user_errors
 from train.callbacks import GracefulInterrupt
 from train.checkpoint import latest_checkpoint
+from train.hyperparameters import ALGOS
 from train.mix.tasks import evaluation_tasks, is_mix
 from train.run import ALREADY_COMPLETE, train
-from train.settings import ALGOS, load_yaml, parse_assignment, settings_from_sources
+from train.settings import load_yaml, settings_from_sources, settings_help
 
 __all__ = ["build_parser", "main"]
 
@@ -181,7 +183,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="python -m train",
         description="Train a policy for the pairflock pair action slot with stable-baselines3 "
         "(PPO, SAC, TD3) on the native batched VecEnv, one row per paired UAV.",
-        epilog=EPILOG,
+        epilog=EPILOG
+        + "\nsettings (the keys of --config files and of <out>/settings.yaml; flags set them "
+        "too):\n" + settings_help(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     _task_options(p)

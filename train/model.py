@@ -12,8 +12,9 @@ from stable_baselines3.common.noise import NormalActionNoise
 from stable_baselines3.common.save_util import load_from_zip_file
 
 from baselines.controllers.sb3 import METADATA_KEY
+from baselines.controllers.zoo import resolve_model
 from train.hyperparameters import resolve_schedules
-from train.settings import RunSettings, init_model_path
+from train.settings import RunSettings
 
 __all__ = [
     "METADATA_KEY",
@@ -35,7 +36,7 @@ def build_model(settings: RunSettings, venv: Any) -> Any:
         hp["action_noise"] = NormalActionNoise(np.zeros(D), std * np.ones(D))
     model = cls("MlpPolicy", venv, seed=settings.seed, device="cpu", verbose=0, **hp)
     if settings.init_model is not None:
-        warm_start(model, init_model_path(settings.init_model))
+        warm_start(model, resolve_model(settings.init_model))
     return model
 
 

@@ -33,7 +33,6 @@ import re
 from collections.abc import Mapping
 from typing import Any
 
-from baselines.reporting.criteria import TARGETS
 from pairflock_env import make_config
 from pairflock_env.interfaces import make_interface
 
@@ -44,6 +43,8 @@ __all__ = [
     "check_tasks",
     "evaluation_tasks",
     "is_mix",
+    "task_entries",
+    "task_fields",
     "training_tasks",
 ]
 
@@ -76,8 +77,9 @@ def is_mix(settings: Any) -> bool:
     return settings.tasks is not None or settings.eval_tasks is not None
 
 
-def _fields(entry: Any, where: str, allowed: tuple[str, ...]) -> dict[str, Any]:
-    """The config fields of a task entry (its own keys checked and removed)."""
+def task_fields(entry: Any, where: str, allowed: tuple[str, ...]) -> dict[str, Any]:
+    """The config fields of a task entry (its own keys checked and removed; ``allowed``: the
+    keys of its own it may have)."""
     if not isinstance(entry, Mapping):
         raise TypeError(
             f"{where}={entry!r} is invalid: a task is a mapping of PairFlockConfig fields "
@@ -120,7 +122,8 @@ def _config(preset: str | None, overrides: Mapping[str, Any], where: str):
         raise type(e)(f"{where}: {e}") from None
 
 
-def _entries(value: Any, key: str) -> list[Any]:
+def task_entries(value: Any, key: str) -> list[Any]:
+    """The entries of the ``tasks``/``eval_tasks`` setting ``key``: a non-empty list."""
     if not isinstance(value, list):
         raise TypeError(
             f"{key}={value!r} is invalid: must be a list of tasks (mappings), e.g. "
@@ -149,9 +152,9 @@ def training_tasks(settings: Any) -> list[Task] | None:
         return None
     shared = settings.config_overrides()
     out = []
-    for i, entry in enumerate(_entries(settings.tasks, "tasks")):
+    for i, entry in enumerate(task_entries(settings.tasks, "tasks")):
         where = f"tasks[{i}]"
-        over = {**shared, **_fields(entry, where, TASK_KEYS)}
+        over = {**shared, **task_fields(entry, where, TASK_KEYS)}
         cfg = _config(settings.preset, over, where)
         n = _num_swarms(entry, settings.num_swarms, where)
         out.append(Task(_name(entry, cfg, where), over, n))
@@ -164,12 +167,12 @@ def evaluation_tasks(settings: Any) -> list[Task]:
     if settings.eval_tasks is None and settings.tasks is None:
         return [Task("", settings.eval_overrides())]
     key = "eval_tasks" if settings.eval_tasks is not None else "tasks"
-    entries = _entries(settings.eval_tasks if key == "eval_tasks" else settings.tasks, key)
+    entries = task_entries(settings.eval_tasks if key == "eval_tasks" else settings.tasks, key)
     base = settings.eval_overrides()
     out = []
     for i, entry in enumerate(entries):
         where = f"{key}[{i}]"
-        own = _fields(entry, where, ("name",) if key == "eval_tasks" else TASK_KEYS)
+        own = task_fields(entry, where, ("name",) if key == "eval_tasks" else TASK_KEYS)
         if key == "tasks":  # a training task, evaluated with the evaluation's episode length
             own = {k: v for k, v in own.items() if k not in _EPISODE_LENGTH}
         over = {**base, **own}
@@ -211,17 +214,10 @@ def _mismatch(where: str, ref_where: str, iface: Any, ref: Any) -> ValueError:
 
 
 def check_tasks(settings: Any) -> None:
-    """Validate ``tasks``, ``eval_tasks``, ``eval_aggregate`` and ``eval_targets``
-    (TypeError / ValueError naming the task index and key); called by
-    :meth:`RunSettings.validate`."""
-    agg = settings.eval_aggregate
-    if agg not in AGGREGATES:
-        raise ValueError(f"eval_aggregate={agg!r} is invalid: must be one of {AGGREGATES}")
-    if settings.eval_targets not in TARGETS:
-        raise ValueError(
-            f"eval_targets={settings.eval_targets!r} is invalid: must be one of "
-            f"{', '.join(map(repr, TARGETS))}"
-        )
+    """Resolve ``tasks`` and ``eval_tasks`` against the rest of the settings: every task's
+    config builds and gives the first training task's spaces and learning interface
+    (TypeError / ValueError naming the task index and key); a check of
+    :class:`~train.settings.RunSettings`."""
     if not is_mix(settings):
         return
     train = training_tasks(settings)
