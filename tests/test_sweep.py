@@ -171,6 +171,40 @@ def test_ray_backend_gives_the_local_results(local_sweep, tmp_path):
     assert (out / "ray" / "tune" / "tuner.pkl").is_file()  # Tune's experiment, for restore
 
 
+def test_a_sweep_stopped_by_ctrl_c_resumes_to_the_uninterrupted_results(local_sweep, tmp_path):
+    """Ctrl-C while the first trial learns stops it at the end of a rollout with a checkpoint
+    (exit status 130); the sweep run again gives the results of a sweep never stopped, and
+    the stopped trial's run.json says it completed."""
+    out = tmp_path / "stopped"
+    args = [*SWEEP, "--backend", "local", "--max-concurrent", "1", "--out", str(out)]
+    args += ["--quiet", "--no-figure"]
+    first = out / "trials" / "default" / "seed_0"
+    p = subprocess.Popen(
+        [sys.executable, "-m", "train.sweep", *args],
+        cwd=ROOT,
+        env=ENV,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    try:
+        deadline = time.time() + 180
+        while time.time() < deadline and not list((first / "logs").glob("progress_*.csv")):
+            time.sleep(0.05)
+        p.send_signal(signal.SIGINT)  # learning has started: stop mid-trial
+        _, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 130, err.decode()[-3000:]
+    assert not (first / "sweep_trial.json").exists()  # stopped before its end
+    assert json.loads((first / "run.json").read_text())["status"].startswith("interrupted")
+    r = _cli(*args)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert _rows_without_wall(out / "sweep.csv") == _rows_without_wall(local_sweep[0] / "sweep.csv")
+    record = json.loads((first / "run.json").read_text())
+    assert record["status"] == "completed" and record["resumed_sessions"]
+
+
 def test_help_shows_usage_and_examples():
     r = _cli("--help", timeout=60)
     assert r.returncode == 0

@@ -13,6 +13,7 @@ import sys
 import time
 import zipfile
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -463,6 +464,29 @@ def test_ctrl_c_mid_rollout_resumes_to_the_uninterrupted_end(tmp_path, monkeypat
     eb = (part / "eval.csv").read_text().splitlines()
     strip = lambda lines: [",".join(x for i, x in enumerate(r.split(",")) if i != 1) for r in lines]  # noqa: E731
     assert strip(ea) == strip(eb)  # the same evaluations at the same steps (wall time aside)
+
+
+@pytest.mark.parametrize("first_end", ["interrupted", "killed"])
+def test_run_json_says_how_a_resumed_run_ended(tmp_path, first_end):
+    """After a successful --resume, run.json says the run completed: the first session was
+    stopped (Ctrl-C: its run.json says interrupted) or killed (SIGKILL: its run.json still
+    says running, as written when learning started)."""
+    from train.run import train
+
+    s = _settings(total_steps=128, eval_every=0, checkpoint_every=0)
+    out = tmp_path / "run"
+    stopped = train(s, out, quiet=True, interrupt=SimpleNamespace(requested=True))
+    assert stopped.interrupted
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"].startswith("interrupted")
+    if first_end == "killed":  # what a session killed while learning leaves behind
+        (out / "run.json").write_text(json.dumps({**record, "status": "running"}))
+    resumed = train(s, out, resume=out, quiet=True)
+    assert resumed.status == "completed" and resumed.num_timesteps == 128
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "completed" and record["num_timesteps"] == 128
+    session = json.loads((out / record["resumed_sessions"][-1]).read_text())
+    assert session["status"] == "completed" and session["resumed_from"]
 
 
 def test_values_are_read_as_written_by_the_train_cli(tmp_path):

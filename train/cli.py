@@ -29,7 +29,8 @@ EPILOG = textwrap.dedent(
     files written to --out:
       settings.yaml          effective settings (rerun with --config <out>/settings.yaml)
       run.json               config, interface, seed, package versions, git commit, status,
-                             timing, final evaluation (run_resumed_<N>.json after --resume)
+                             timing, final evaluation; a resumed session writes its own
+                             run_resumed_<N>.json and updates the status in run.json
       eval.csv               periodic evaluation of the policy (step, summary over seeds)
       eval_baselines.json    the analytic controllers on the same seeds (computed once)
       logs/progress_*.csv    SB3 training log; tensorboard/ for `tensorboard --logdir <out>`

@@ -63,6 +63,8 @@ __all__ = [
 ]
 
 FINAL_MODEL = "final_model.zip"
+#: the run's record; a resumed session writes its own (run_resumed_<steps>.json) and updates it
+RUN_RECORD = "run.json"
 BEST_MODEL = "best_model.zip"
 #: status of a resumed run that had already reached its step target (nothing is changed)
 ALREADY_COMPLETE = "already complete"
@@ -276,7 +278,7 @@ class _Session:
             **mix,
         )
         resumed = f"run_resumed_{self.start_steps:012d}.json"
-        self.record_name = "run.json" if self.state is None else resumed
+        self.record_name = RUN_RECORD if self.state is None else resumed
         write_json(self.out / self.record_name, self.record)
 
     def learn(self, interrupt: Any) -> str:
@@ -321,8 +323,24 @@ class _Session:
             baselines=baselines,
         )
         write_json(self.out / self.record_name, self.record)
+        if self.record_name != RUN_RECORD:
+            self._update_run_record()
         self.venv.close()
         return RunResult(self.out, int(model.num_timesteps), status, self.wall(), final_summary)
+
+    def _update_run_record(self) -> None:
+        """After a resumed session, ``run.json`` says how the run stands now (its status,
+        steps, time, last checkpoint and final evaluation) and names the session records;
+        the first session's configuration stays as it was."""
+        path = self.out / RUN_RECORD
+        try:
+            run = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):  # no readable record of the first session
+            return
+        for key in ("status", "num_timesteps", "wall_s", "last_checkpoint", "final_summary"):
+            run[key] = self.record[key]
+        run["resumed_sessions"] = [*run.get("resumed_sessions", []), self.record_name]
+        write_json(path, run)
 
 
 def _open(settings: RunSettings, out: Path, resume: Path | None, overwrite: bool):
