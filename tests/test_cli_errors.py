@@ -67,7 +67,7 @@ def test_every_command_line_turns_bad_input_into_one_line_and_status_2(tmp_path)
         )
     wrong = []
     for (module, args), proc, i in zip(CASES, procs, range(len(CASES)), strict=True):
-        out, err = proc.communicate(timeout=300)
+        _, err = proc.communicate(timeout=300)
         lines = err.strip().splitlines()
         ok = (
             proc.returncode == 2
