@@ -17,9 +17,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from baselines.reporting.stats import iqm_ci
+
 pytest.importorskip("torch")
 pytest.importorskip("stable_baselines3")
 pytest.importorskip("rliable")
+
+from rliable import metrics
+
+from train.checkpoint import latest_checkpoint
+from train.mix.evaluation import aggregate_score
+from train.settings import load_yaml, settings_from_sources
+from train.sweep.cli import main
+from train.sweep.local import Progress, run_local
+from train.sweep.plan import SweepPlan, parse_grid
+from train.sweep.report import csv_rows, summary_markdown
+from train.sweep.trial import FINAL_ROWS, run_trial
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV_OVERRIDES = {"OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
@@ -106,7 +119,6 @@ def local_sweep(tmp_path_factory):
     assert (first / "sweep_trial.json").is_file(), p.stderr.read().decode()[-3000:]
     p.stderr.close()
     before = {n: (first / n).stat().st_mtime_ns for n in ("run.json", "sweep_trial.json")}
-    from train.sweep.cli import main
 
     assert main(args) == 0
     return out, before
@@ -130,9 +142,6 @@ def test_resumed_sweep_runs_only_the_unfinished_trial(local_sweep):
 
 
 def test_each_trial_is_an_ordinary_resumable_run_directory(local_sweep):
-    from train.checkpoint import latest_checkpoint
-    from train.settings import load_yaml, settings_from_sources
-
     out, _ = local_sweep
     trials = json.loads((out / "sweep.json").read_text())["trials"]
     for t in trials:
@@ -217,8 +226,6 @@ def test_help_shows_usage_and_examples():
 
 
 def test_dotted_keys_map_onto_run_settings():
-    from train.sweep.plan import SweepPlan, parse_grid
-
     assert parse_grid("hp.learning_rate=3e-4,1e-4") == ("hp.learning_rate", [3e-4, 1e-4])
     key, vals = parse_grid("hp.policy_kwargs.net_arch=[64,64],[128,128]")
     assert vals == [[64, 64], [128, 128]]
@@ -258,8 +265,6 @@ def test_dotted_keys_map_onto_run_settings():
     ],
 )
 def test_bad_sweeps_are_named_before_anything_runs(tmp_path, capsys, args, message):
-    from train.sweep.cli import main
-
     with pytest.raises(SystemExit) as e:
         main([*args, "--out", str(tmp_path / "x"), "--quiet"])
     err = capsys.readouterr().err
@@ -268,8 +273,6 @@ def test_bad_sweeps_are_named_before_anything_runs(tmp_path, capsys, args, messa
 
 
 def test_out_and_resume_are_protected(tmp_path, capsys):
-    from train.sweep.cli import main
-
     (tmp_path / "busy").mkdir()
     (tmp_path / "busy" / "file").write_text("x")
     for argv, message in [
@@ -285,9 +288,6 @@ def test_out_and_resume_are_protected(tmp_path, capsys):
 
 
 def test_a_failing_worker_is_reported_and_the_others_go_on(tmp_path):
-    from train.sweep.local import Progress, run_local
-    from train.sweep.plan import SweepPlan
-
     plan = SweepPlan(base={}, fixed=[], grid=[], seeds=[0])
     (trial,) = plan.trials()
     (tmp_path / "sweep.json").write_text(json.dumps({"trials": []}))  # the worker won't find it
@@ -300,10 +300,6 @@ def test_a_failing_worker_is_reported_and_the_others_go_on(tmp_path):
 
 
 def test_iqm_and_interval_are_rliables_and_reproducible():
-    from rliable import metrics
-
-    from baselines.reporting.stats import iqm_ci
-
     x = np.random.default_rng(5).random((7, 3))
     global_state = np.random.get_state()[1].copy()
     point, lo, hi = iqm_ci(x, reps=300)
@@ -317,8 +313,6 @@ def test_iqm_and_interval_are_rliables_and_reproducible():
 
 
 def test_never_reached_band_is_censored_and_marked():
-    from train.sweep.report import summary_markdown
-
     def result(seed, band):
         s = dict(
             ss_error_median=0.1, band_time_max=band, min_separation_min=2.0, peak_accel_max=40.0
@@ -350,11 +344,6 @@ def test_never_reached_band_is_censored_and_marked():
 def test_a_sweep_of_a_task_mix_reports_the_aggregate_and_every_task(tmp_path):
     """Trials of a multi-task config (train/tasks.py): final evaluation and aims per evaluation
     task plus over every task; the summary has a table per task next to the aggregate."""
-    from train.mix.evaluation import aggregate_score
-    from train.sweep.plan import SweepPlan
-    from train.sweep.report import csv_rows, summary_markdown
-    from train.sweep.trial import FINAL_ROWS, run_trial
-
     base = {
         "env": {"n_uavs": 8, "pair_accel_limit": 50.0, "max_cycles": 100},
         "tasks": [{"name": "a", "num_swarms": 1}, {"name": "b", "init": "random", "num_swarms": 1}],
