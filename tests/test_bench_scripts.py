@@ -1,0 +1,34 @@
+"""Every speed script of ``benchmarks/`` runs, in its ``--smoke`` mode (each part once, tiny:
+seconds), so that a change of the API breaks a test here rather than a user's command."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+from bench_scripts import BENCHMARKS, SCRIPTS
+
+
+def test_the_scripts_are_found():
+    assert {"bench_core", "bench_views", "bench_safety", "bench_quadrotor"} <= set(SCRIPTS)
+    assert "bench_training" in SCRIPTS
+
+
+@pytest.mark.parametrize("name", SCRIPTS)
+def test_each_script_runs_its_smoke_mode(name, tmp_path):
+    if name == "bench_training":
+        pytest.importorskip("supersuit")
+    env = dict(os.environ, OMP_NUM_THREADS="1", MPLBACKEND="Agg")
+    extra = ["--out", str(tmp_path / "out.json")] if name == "bench_training" else []
+    r = subprocess.run(
+        [sys.executable, str(BENCHMARKS / f"{name}.py"), "--smoke", *extra],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert "|" in r.stdout or "steps/s" in r.stdout  # its table or lines were printed
