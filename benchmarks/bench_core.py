@@ -33,8 +33,9 @@ from _timing import median_rate, print_breakdown  # noqa: E402
 
 from baselines.runtime.cli import ArgumentParser, at_least  # noqa: E402
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
-from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pass  # noqa: E402
+from pairflock_env.swarm.flocking import flocking_params, flocking_pass  # noqa: E402
 from pairflock_env.swarm.grid import NeighborGrid  # noqa: E402
+from pairflock_env.swarm.pair_pass import pair_pass  # noqa: E402
 from pairflock_env.swarm.spacing import place  # noqa: E402
 
 SECTIONS = ("core", "pettingzoo", "breakdown", "kernels", "large", "threshold")
@@ -75,7 +76,7 @@ def breakdown(N: int, B: int, repeats: int, search: str | None = None) -> dict[s
     core = PairFlockCore(cfg, num_swarms=B)
     core.reset(seed=0)
     lq, lp = core.leader_state()
-    params = FlockingParams(cfg)
+    params = flocking_params(cfg)
     fl_out, pp_out = {}, {}
     grid = core.neighbor_grid
 
@@ -138,7 +139,7 @@ def kernel_state(kind: str, N: int, B: int, seed: int = 0):
 def bench_kernels(kind: str, N: int, B: int, grid: bool, repeats: int, min_time: float) -> float:
     """UAV-steps/s of the neighbour kernels of one step (all pairs, or grid build + passes)."""
     cfg = make_config("paper", n_uavs=N)
-    prm = FlockingParams(cfg)
+    prm = flocking_params(cfg)
     q, p = kernel_state(kind, N, B)
     lq, lp, pinned = np.zeros((B, 2)), np.zeros((B, 2)), np.ones((B, N))
     agents, partners = np.array([0, 1]), np.array([1, 0])

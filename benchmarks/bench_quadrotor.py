@@ -32,7 +32,8 @@ from baselines import make_pair_policy  # noqa: E402
 from baselines.runtime.cli import ArgumentParser, at_least  # noqa: E402
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
 from pairflock_env.dynamics.quadrotor import QuadrotorModel  # noqa: E402
-from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pass  # noqa: E402
+from pairflock_env.swarm.flocking import flocking_params, flocking_pass  # noqa: E402
+from pairflock_env.swarm.pair_pass import pair_pass  # noqa: E402
 from pairflock_env.swarm.passes import NeighborPass  # noqa: E402
 
 PRESET = "paper-quadrotor"
@@ -162,7 +163,7 @@ def large_report(sizes, repeats: int, min_time: float, cpu_time: bool) -> None:
 def _pass_timers(core: PairFlockCore, cfg) -> tuple:
     """The flocking pass and the pair pass of ``core``'s state, as zero-argument functions."""
     lq, lp = core.leader_state()
-    params = FlockingParams(cfg)
+    params = flocking_params(cfg)
     fl_out, pp_out = {}, {}
 
     def flock():

@@ -62,6 +62,7 @@ from baselines.runtime.cli import ArgumentParser, at_least  # noqa: E402
 from pairflock_env import PairFlockCore, make_config  # noqa: E402
 from pairflock_env.envs.sb3 import PairFlockSB3VecEnv  # noqa: E402
 from pairflock_env.safety import SafetyFilter, SafetyParams  # noqa: E402
+from pairflock_env.safety.cbf.kernels import BARRIER  # noqa: E402
 
 
 def states(N: int, B: int, limit: float, params: dict):
@@ -355,7 +356,9 @@ def filter_table(N: int, B: int, limit: float, repeats: int, min_time: float) ->
     cfg, core, filt, cases = states(N, B, limit, {})
     buf = filt.allocate(B, cfg.dim)
     full = SafetyFilter(filt.params, core.agent_uavs, N, core.partner_uavs)
-    full._pr[9] = 0.0  # the kernel's skip switch (_kernels._far): evaluate every UAV
+    full._pr[BARRIER.index.skip_far] = (
+        0.0  # the kernel's skip switch (_kernels._far): evaluate every UAV
+    )
     buf_full = full.allocate(B, cfg.dim)
     actions = np.zeros((B, core.n_agents, cfg.dim))
 

@@ -12,6 +12,8 @@ the SB3 VecEnv with one row per paired UAV is ``pairflock_env.envs.PairFlockSB3V
 :mod:`pairflock_env.task.spaces`.
 """
 
+import gymnasium
+
 from pairflock_env.config import PRESETS, PairFlockConfig, make_config, preset_names
 from pairflock_env.config.registry import load_plugins
 from pairflock_env.core import AGENT_INFO_KEYS, SWARM_INFO_KEYS, PairFlockCore, StepResult
@@ -33,8 +35,6 @@ __version__ = "0.1.0"
 
 
 def _register_gymnasium() -> None:
-    import gymnasium
-
     if ENV_ID not in gymnasium.registry:
         gymnasium.register(
             id=ENV_ID,

@@ -192,6 +192,13 @@ class PairFlockCore:
         return self._flock_out["acc"]
 
     @property
+    def closest_distance(self) -> np.ndarray:
+        """Each UAV's distance to its nearest other UAV (its partner excluded) in the current
+        state, (B, N), m (a new array; inf with no other UAV)."""
+        self._require_reset()
+        return np.sqrt(self._flock_out["min_d2"])
+
+    @property
     def neighbor_grid(self) -> NeighborGrid | None:
         """The neighbour grid of the current state, built by the last pass (``None`` with
         all-pairs search): a stage that needs the neighbours of the current state (a safety

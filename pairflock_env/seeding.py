@@ -56,6 +56,15 @@ def check_seed(seed: Any, name: str = "seed") -> int | np.random.SeedSequence | 
     return int(seed)
 
 
+def _entries(seeds: Any) -> list | None:
+    """The entries of a sequence of seeds (a list, tuple or 1-D numpy array), else None."""
+    if isinstance(seeds, np.ndarray) and seeds.ndim == 1:
+        return seeds.tolist() if seeds.dtype.kind in "iu" else list(seeds)
+    if isinstance(seeds, Sequence) and not isinstance(seeds, (str, bytes)):
+        return list(seeds)
+    return None
+
+
 def check_seed_list(seeds: Any, n: int, name: str = "seed") -> list:
     """A sequence of exactly ``n`` seeds (one per swarm), each validated by :func:`check_seed`.
 
@@ -63,10 +72,12 @@ def check_seed_list(seeds: Any, n: int, name: str = "seed") -> list:
         TypeError: ``seeds`` is not a sequence (a str is not), or an entry is of a wrong type.
         ValueError: the length is not ``n``, or an entry is negative.
     """
-    if not isinstance(seeds, Sequence) or isinstance(seeds, (str, bytes)):
+    entries = _entries(seeds)
+    if entries is None:
         raise TypeError(
             f"{name}={seeds!r} is invalid: must be a seed ({_VALID}) or a sequence of {n} seeds"
         )
+    seeds = entries
     if len(seeds) != n:
         raise ValueError(f"{name} has {len(seeds)} entries, expected {n} (one per swarm)")
     return [check_seed(s, f"{name}[{i}]") for i, s in enumerate(seeds)]
@@ -92,16 +103,16 @@ def swarm_generators(seed: Any, n: int, name: str = "seed") -> list[np.random.Ge
     sequence of ``n`` seeds gives one generator per entry, ``None`` where an entry is None
     (that swarm keeps its generator).
     """
-    if seed is None or not isinstance(seed, Sequence) or isinstance(seed, (str, bytes)):
+    if _entries(seed) is None:
         return [np.random.default_rng(c) for c in spawn(check_seed(seed, name), n)]
     return [None if s is None else np.random.default_rng(s) for s in check_seed_list(seed, n, name)]
 
 
 def offset_seeds(seed: Any, n: int, name: str = "seed") -> list | None:
     """Per-sub-env seeds under the vector views' rule: ``None`` -> None, an int ``s`` ->
-    ``[s, s + 1, ..., s + n - 1]``, a SeedSequence -> its ``n`` children, a sequence of ``n``
-    seeds -> those seeds (validated)."""
-    if isinstance(seed, Sequence) and not isinstance(seed, (str, bytes)):
+    ``[s, s + 1, ..., s + n - 1]``, a SeedSequence -> its ``n`` children, a sequence (list,
+    tuple or 1-D array) of ``n`` seeds -> those seeds (validated)."""
+    if _entries(seed) is not None:
         return check_seed_list(seed, n, name)
     s = check_seed(seed, name)
     if s is None:

@@ -17,6 +17,7 @@ import pytest
 
 from pairflock_env import ENV_ID, PairFlockCore, make_config, parallel_env
 from pairflock_env.config.arrays import real_array
+from pairflock_env.envs import PairFlockSB3VecEnv
 from pairflock_env.envs.vector import PairFlockGymVectorEnv
 from pairflock_env.task.actions import check_pair_actions, decode_pair_actions
 
@@ -154,8 +155,6 @@ class _View:
             self.env.reset(seed=3)
             self.core = self.env.core
         else:
-            from pairflock_env.envs import PairFlockSB3VecEnv
-
             self.env = PairFlockSB3VecEnv(num_swarms=1, interface="world", **KW)
             self.env.seed(3)
             self.env.reset()

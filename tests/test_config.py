@@ -5,10 +5,28 @@ from __future__ import annotations
 import copy
 import dataclasses
 import inspect
+import json
+import math
+import pickle
+import warnings
+import zipfile
+from pathlib import Path
 
+import gymnasium as gym
+import numpy as np
 import pytest
 
-from pairflock_env import PRESETS, PairFlockConfig, make_config, parallel_env
+from pairflock_env import ENV_ID, PRESETS, PairFlockConfig, PairFlockCore, make_config, parallel_env
+from pairflock_env.compat import upgrade_stored
+from pairflock_env.config import LIMITS, SCHEMA, ConfigSection, UnknownFieldError, field_names
+from pairflock_env.config.docs import render
+from pairflock_env.config.sections import safety
+from pairflock_env.config.sections.initial_state import start_density
+from pairflock_env.config.sections.observation import base_obs_size as obs_size
+from pairflock_env.interfaces import PairInterfaceParams, interface_from_dict, make_interface
+from pairflock_env.task.observations import ObsLayout
+from train.mix.tasks import training_tasks
+from train.settings import RunSettings
 
 
 def test_paper_preset_matches_the_notes_table():
@@ -20,7 +38,6 @@ def test_paper_preset_matches_the_notes_table():
     assert cfg.leader_position == (25.0, 25.0) and cfg.leader_velocity == (0.5, 0.5)
     assert cfg.dt == 0.01 and cfg.episode_steps == 5000
     # g_r(d) = a defines sigma: 10 exp(-d^2/sigma^2) = 1
-    import math
 
     assert 10.0 * math.exp(-(7.0**2) / cfg.repulsion_sigma2) == pytest.approx(1.0)
 
@@ -98,7 +115,6 @@ def test_config_is_frozen_and_serialisable():
 
 # ------------------------------------------------------------------ declarations
 def test_every_field_is_declared_with_type_unit_range_and_meaning():
-    from pairflock_env.config import SCHEMA, field_names
 
     cfg = PairFlockConfig()
     names = [n for n in vars(cfg) if not n.startswith("_")]  # the values a config holds
@@ -116,7 +132,6 @@ def test_every_field_is_declared_with_type_unit_range_and_meaning():
 
 
 def test_presets_list_only_what_differs_from_the_defaults():
-    from pairflock_env.config import SCHEMA
 
     assert PRESETS["paper"] == {}  # the defaults are the paper's values
     for name, entries in PRESETS.items():
@@ -131,12 +146,6 @@ def test_presets_list_only_what_differs_from_the_defaults():
 def test_stored_model_configs_load_to_the_same_values(tmp_path):
     """A config stored in a model zip by the previous release (with safe_distance) loads
     silently, and the same task built today has exactly the stored values."""
-    import json
-    import warnings
-    import zipfile
-    from pathlib import Path
-
-    from pairflock_env.config import SCHEMA
 
     models = sorted((Path(__file__).parent.parent / "models").glob("*.zip"))
     assert models
@@ -157,9 +166,6 @@ def test_stored_model_configs_load_to_the_same_values(tmp_path):
         assert all(now[k] == PairFlockConfig().to_dict()[k] for k in new)
         assert all(getattr(cfg, k) == SCHEMA.fields[k].default for k in new)
         # the run's own task resolution (dynamics key, a task mix's first task) rebuilds it
-        from pairflock_env.config.sections import safety
-        from train.mix.tasks import training_tasks
-        from train.settings import RunSettings
 
         run = RunSettings.from_dict(meta["settings"])
         tasks = training_tasks(run)
@@ -190,7 +196,6 @@ CHANGED_DEFAULTS = {"safety_sensing_radius": 20.0}  # 100 m since the chattering
 
 
 def test_values_are_normalised():
-    import numpy as np
 
     cfg = make_config(
         "paper",
@@ -211,7 +216,6 @@ def test_values_are_normalised():
 
 
 def test_sections_group_the_flat_fields():
-    from pairflock_env.config import SCHEMA, ConfigSection
 
     cfg = make_config("paper-quadrotor")
     sec = cfg.section("flocking")
@@ -227,11 +231,6 @@ def test_sections_group_the_flat_fields():
 
 
 def test_unknown_keywords_are_type_errors_everywhere():
-    import gymnasium as gym
-
-    from pairflock_env import ENV_ID, PairFlockCore
-    from pairflock_env.config import UnknownFieldError
-    from pairflock_env.interfaces import PairInterfaceParams, make_interface
 
     cfg = make_config("paper", n_uavs=8)
     calls = [
@@ -260,10 +259,6 @@ def test_unknown_keywords_are_type_errors_everywhere():
 
 
 def test_choosing_the_quadrotor_picks_dim_and_substeps():
-    import gymnasium as gym
-    import numpy as np
-
-    from pairflock_env import ENV_ID
 
     cfg = make_config("paper", dynamics="quadrotor")
     assert cfg.dim == 3 and cfg.leader_position == (25.0, 25.0, 25.0)
@@ -327,8 +322,6 @@ def test_placement_that_cannot_succeed_is_refused_at_construction():
             make_config(preset, **overrides)
         assert "[with " in str(e.value)
     # as dense as allowed still places (2-D: 0.3, 3-D: 0.15 of the start box)
-    from pairflock_env import PairFlockCore
-    from pairflock_env.config.sections.initial_state import start_density
 
     cfg = make_config("paper", n_uavs=60, swarm_half_width=18.0, min_init_spacing=3.0)
     assert 0.2 < start_density(cfg) <= 0.3
@@ -337,8 +330,6 @@ def test_placement_that_cannot_succeed_is_refused_at_construction():
 
 
 def test_obs_size_formula_matches_the_layout():
-    from pairflock_env.config.sections.observation import base_obs_size as obs_size
-    from pairflock_env.task.observations import ObsLayout
 
     for dim in (2, 3):
         for k in (0, 1, 6, 1000):
@@ -349,11 +340,6 @@ def test_obs_size_formula_matches_the_layout():
 def test_old_names_live_only_in_stored_data():
     """Before the first release no old name is kept as a keyword; the keys that committed
     model files store (``safe_distance``) load through pairflock_env.compat alone."""
-    import warnings
-
-    from pairflock_env.compat import upgrade_stored
-    from pairflock_env.config.fields import UnknownFieldError
-    from pairflock_env.interfaces import PairInterfaceParams, interface_from_dict, make_interface
 
     with pytest.raises(UnknownFieldError, match="'safe_distance'"):
         make_config("paper", safe_distance=1.5)
@@ -377,7 +363,6 @@ def test_old_names_live_only_in_stored_data():
 
 def test_an_unpickled_config_is_validated_again():
     """Issue 28, 8(e): a pickle is data; one holding an invalid value does not load."""
-    import pickle
 
     cfg = make_config("paper", n_uavs=20)
     assert pickle.loads(pickle.dumps(cfg)) == cfg
@@ -391,16 +376,12 @@ def test_an_unpickled_config_is_validated_again():
 
 
 def test_docs_config_md_is_current():
-    from pathlib import Path
-
-    from pairflock_env.config.docs import render
 
     path = Path(__file__).parent.parent / "docs" / "config.md"
     assert path.read_text(encoding="utf-8") == render(), (
         "docs/config.md is stale: run `python -m pairflock_env.config.docs docs/config.md`"
     )
     text = render()
-    from pairflock_env.config import LIMITS, SCHEMA
 
     for name in SCHEMA.fields:
         assert f"| `{name}` |" in text

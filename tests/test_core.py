@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pairflock_env import PairFlockCore, make_config
+from pairflock_env import PairFlockCore, make_config, parallel_env
+from pairflock_env.task.spaces import separation_bound
 
 
 def _run(core: PairFlockCore, actions: np.ndarray):
@@ -262,3 +263,22 @@ def test_disturbance_changes_the_flight_deterministically():
         calm.step(np.zeros((1, 2, 2)))
     assert np.array_equal(runs[0], runs[1])
     assert not np.allclose(runs[0], calm.q)
+
+
+def test_two_uavs_report_finite_infos_at_every_step():
+    """Issue 28, 8(d): with no non-partner UAV (n_uavs = 2) min_separation is the largest
+    finite separation, not inf, in the core and every view's infos."""
+
+    cfg = make_config("paper", n_uavs=2)
+    core = PairFlockCore(cfg, num_swarms=2)
+    res = core.reset(seed=0)
+    for _ in range(20):
+        for v in res.info.values():
+            assert np.all(np.isfinite(v))
+        assert np.all(res.info["min_separation"] == separation_bound(cfg))
+        res = core.step(np.zeros((2, 2, 2)))
+    env = parallel_env(n_uavs=2, interface="pair")
+    env.reset(seed=0)
+    _, rew, *_, infos = env.step({a: np.zeros(2) for a in env.agents})
+    assert all(np.isfinite(infos[a]["min_separation"]) for a in env.agents)
+    assert all(np.isfinite(r) and r > -10 for r in rew.values())

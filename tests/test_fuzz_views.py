@@ -11,18 +11,17 @@ Examples are derandomized (reproducible on CI), 50 per view and property (about 
 
 from __future__ import annotations
 
+import copy
 import math
 import warnings
 from typing import Any
 
 import numpy as np
 import pytest
-
-hypothesis = pytest.importorskip("hypothesis")
-from hypothesis import HealthCheck, given, settings  # noqa: E402
-from hypothesis import strategies as st  # noqa: E402
-from hypothesis.extra import numpy as hnp  # noqa: E402
-from view_helpers import (  # noqa: E402
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+from view_helpers import (
     VIEWS,
     make_view,
     reset_view,
@@ -30,6 +29,8 @@ from view_helpers import (  # noqa: E402
     step_view,
     zero_action,
 )
+
+from pairflock_env.seeding import check_seed, offset_seeds, swarm_generators
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning", "ignore::DeprecationWarning")
 
@@ -304,9 +305,6 @@ def test_seed_types_are_treated_alike_in_every_view(kind):
 def test_one_seed_rule_keeps_numpys_spawn_semantics():
     """seeding.swarm_generators gives what SeedSequence(seed).spawn(n) gave (bit-identical
     results), without advancing a SeedSequence passed in."""
-    import copy
-
-    from pairflock_env.seeding import check_seed, offset_seeds, swarm_generators
 
     for seed in (0, 5, np.int64(7), 2**70, np.random.SeedSequence(3)):
         ref_ss = copy.deepcopy(seed) if isinstance(seed, np.random.SeedSequence) else None
@@ -373,3 +371,43 @@ def test_render_before_reset_raises_and_without_a_render_mode_warns(kind):
         else:
             with pytest.warns(UserWarning, match="render_mode"):
                 assert plain.render() is None
+
+
+@pytest.mark.parametrize("kind", VIEWS)
+def test_reset_options_take_the_actions_check(kind):
+    """Issue 28, 8(a): positions / velocities given as numeric strings, bools, complex
+    numbers or masked entries are refused in every view, as the same forms are as actions
+    (one check of real arrays: pairflock_env.config.arrays.real_array); the env is unchanged."""
+    env = make_view(kind)
+    reset_view(env, kind, seed=0)
+    before = snapshot(env)
+    N, D = N_UAVS, DIM
+    good = np.random.default_rng(0).uniform(-30, 30, (N, D))
+    bad = [
+        (good.astype(str), TypeError),
+        (good > 0, TypeError),
+        (good + 0j, TypeError),
+        (np.ma.masked_array(good, mask=np.eye(N, D, dtype=bool)), ValueError),
+        (np.ma.masked_array(good, mask=True), ValueError),
+    ]
+    for value, exc in bad:
+        for key in ("positions", "velocities"):
+            with pytest.raises(exc, match=key):
+                reset_view(env, kind, seed=None, options={key: value})
+    assert snapshot(env) == before
+    reset_view(env, kind, seed=0, options={"positions": good})  # the same values as floats
+
+
+@pytest.mark.parametrize("kind", ["vector", "sb3"])
+def test_a_numpy_array_of_seeds_is_a_list_of_seeds(kind):
+    """Issue 28, 8: the batched views take a 1-D numpy array of seeds as they take a list."""
+    a, b = make_view(kind), make_view(kind)
+    if kind == "sb3":
+        a.seed([3, 7]), b.seed(np.array([3, 7]))
+        obs_a, obs_b = a.reset(), b.reset()
+    else:
+        obs_a, _ = a.reset(seed=[3, 7])
+        obs_b, _ = b.reset(seed=np.array([3, 7], dtype=np.int64))
+    np.testing.assert_array_equal(obs_a, obs_b)
+    with pytest.raises(ValueError, match="seed"):
+        reset_view(a, kind, seed=np.array([3, -7]))

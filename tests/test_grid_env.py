@@ -3,12 +3,15 @@ same episodes, "auto" keeps small swarms on all pairs, and large swarms start se
 
 from __future__ import annotations
 
+import tracemalloc
+
 import numpy as np
 import pytest
 
 from pairflock_env import PairFlockCore, make_config, parallel_env
 from pairflock_env.config.sections.initial_state import START_HALF_WIDTH, START_UAVS
 from pairflock_env.config.sections.swarm import GRID_MIN_UAVS
+from pairflock_env.render import CROWD_UAVS, SwarmRenderer, crowd_scale
 from pairflock_env.swarm.placement import pinning_mask
 
 #: distance within which the two searches' trajectories must agree (m)
@@ -103,7 +106,6 @@ def test_ten_thousand_uavs_just_work():
 def test_a_frame_of_ten_thousand_uavs():
     """Rendering is O(N): a frame of 10,000 UAVs draws, markers shrink for crowded swarms
     (pairs keep the uncrowded size) and swarms up to CROWD_UAVS are drawn as before."""
-    from pairflock_env.render import CROWD_UAVS, SwarmRenderer, crowd_scale
 
     assert crowd_scale(CROWD_UAVS) == 1.0 and crowd_scale(4 * CROWD_UAVS) == 0.5
     rng = np.random.default_rng(0)
@@ -114,7 +116,6 @@ def test_a_frame_of_ten_thousand_uavs():
 
 def _peak_bytes(n_uavs: int) -> int:
     """Peak of numpy's traced allocations while building, resetting and stepping a core."""
-    import tracemalloc
 
     tracemalloc.start()
     core = PairFlockCore(make_config("paper", n_uavs=n_uavs), seed=0)

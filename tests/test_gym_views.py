@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 from gymnasium.vector import AutoresetMode
+from stable_baselines3.common.env_checker import check_env as sb3_check
 
 import pairflock_env
 from pairflock_env import ENV_ID, make_config, parallel_env
@@ -41,7 +42,6 @@ def test_registered_env_passes_gymnasium_check_env(interface):
 
 
 def test_pair_frame_env_passes_sb3_check_env():
-    from stable_baselines3.common.env_checker import check_env as sb3_check
 
     env = gym.make(ENV_ID, **SMALL).unwrapped
     with warnings.catch_warnings():

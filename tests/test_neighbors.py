@@ -8,7 +8,7 @@ import pytest
 
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.config import corner_diagonals
-from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pass
+from pairflock_env.swarm.flocking import flocking_params, flocking_pass
 from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
@@ -17,6 +17,7 @@ from pairflock_env.swarm.grid import (
     order_indices,
     point_cell,
 )
+from pairflock_env.swarm.pair_pass import pair_pass
 from pairflock_env.swarm.spacing import place, redraw_conflicts
 
 
@@ -62,7 +63,7 @@ def compare_passes(cfg, q, p, K, max_cells=None):
     agents, partners = pairs.reshape(-1), pairs[:, ::-1].reshape(-1)
     partner = np.full(N, -1, np.int64)
     partner[agents] = partners
-    prm = FlockingParams(cfg)
+    prm = flocking_params(cfg)
     cell = max(cfg.radius, cfg.collision_distance)
     grid = NeighborGrid(B, N, D, cell, max_cells=max_cells).build(q)
     ref = flocking_pass(prm, q, p, lq, lp, pinned, partner)
@@ -106,7 +107,7 @@ def test_grid_flocking_trajectory_equals_all_pairs():
     rng = np.random.default_rng(5)
     N, D, dt = 300, 2, 0.05
     cfg = make_config("paper", n_uavs=N, pinning=())
-    prm = FlockingParams(cfg)
+    prm = flocking_params(cfg)
     q0 = rng.uniform(-60.0, 60.0, (1, N, D))
     partner = np.full(N, -1, np.int64)
     zero, none = np.zeros((1, D)), np.zeros((1, N))
@@ -205,9 +206,9 @@ def test_grid_input_errors():
     q = np.zeros((1, 10, 2))
     args = (q, q, np.zeros((1, 2)), np.zeros((1, 2)), np.ones((1, 10)), np.full(10, -1))
     with pytest.raises(ValueError, match="too small"):
-        flocking_pass(FlockingParams(cfg), *args, grid=grid.build(q))
+        flocking_pass(flocking_params(cfg), *args, grid=grid.build(q))
     with pytest.raises(TypeError, match="NeighborGrid"):
-        flocking_pass(FlockingParams(cfg), *args, grid="grid")
+        flocking_pass(flocking_params(cfg), *args, grid="grid")
     with pytest.raises(ValueError, match="radius"):
         pair_pass(q, q, np.array([0, 1]), np.array([1, 0]), 8.4, 3, grid=grid)
 

@@ -13,6 +13,8 @@ from pettingzoo.test import (
     parallel_seed_test,
     render_test,
 )
+from pettingzoo.test.state_test import state_test
+from view_helpers import snapshot
 
 import pairflock_env
 from pairflock_env import env as aec_env
@@ -167,7 +169,6 @@ def test_invalid_render_mode():
 
 # ------------------------------------------------------------------ state, spaces, clients
 def test_state_and_state_space_follow_pettingzoo_state_test(small_kwargs):
-    from pettingzoo.test.state_test import state_test
 
     with warnings.catch_warnings():
         warnings.simplefilter("error", UserWarning)  # no "infinite state space" warning
@@ -263,7 +264,6 @@ def test_infos_hold_numbers_only_and_partners_are_an_env_property():
 
 # ------------------------------------------------------------------ AEC: per-step validation
 def _aec_snapshot(e):
-    from view_helpers import snapshot
 
     return snapshot(e.env)  # the AEC env: its stored actions, selection and the parallel env
 

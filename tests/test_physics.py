@@ -8,7 +8,8 @@ import pytest
 
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.dynamics import ParticleModel
-from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pass
+from pairflock_env.swarm.flocking import flocking_params, flocking_pass
+from pairflock_env.swarm.pair_pass import pair_pass
 
 
 def brute_force_flocking(cfg, q, p, lq, lp, h):
@@ -49,7 +50,7 @@ def test_flocking_pass_matches_brute_force(dim):
     h = np.zeros((3, 15))
     h[:, [0, 3, 7]] = 1.0
     partner = np.full(15, -1, np.int64)
-    out = flocking_pass(FlockingParams(cfg), q, p, lq, lp, h, partner)
+    out = flocking_pass(flocking_params(cfg), q, p, lq, lp, h, partner)
     np.testing.assert_allclose(
         out["acc"], brute_force_flocking(cfg, q, p, lq, lp, h), rtol=1e-12, atol=1e-12
     )
@@ -60,7 +61,7 @@ def test_forces_sum_to_zero_without_pinning():
     cfg = make_config("paper", n_uavs=40, pinning=())
     q, p, lq, lp = _random_swarm(rng, 4, 40, 2, box=15.0)
     out = flocking_pass(
-        FlockingParams(cfg), q, p, lq, lp, np.zeros((4, 40)), np.full(40, -1, np.int64)
+        flocking_params(cfg), q, p, lq, lp, np.zeros((4, 40)), np.full(40, -1, np.int64)
     )
     assert np.abs(out["acc"]).max() > 1.0  # the swarm does interact
     np.testing.assert_allclose(out["acc"].sum(axis=1), 0.0, atol=1e-10)
@@ -68,7 +69,7 @@ def test_forces_sum_to_zero_without_pinning():
 
 def test_no_interaction_beyond_radius_and_balance_at_spacing():
     cfg = make_config("paper", n_uavs=2, pinning=())
-    prm = FlockingParams(cfg)
+    prm = flocking_params(cfg)
     partner = np.full(2, -1, np.int64)
     zeros = np.zeros((1, 2))
     p = np.array([[[0.0, 0.0], [1.0, -2.0]]])  # different velocities: consensus would act
@@ -98,7 +99,7 @@ def test_proximity_quantities_match_brute_force():
     q, p, lq, lp = _random_swarm(rng, B, N, D, box=10.0)
     partner = np.full(N, -1, np.int64)
     partner[[0, 1, 2, 3]] = [1, 0, 3, 2]
-    out = flocking_pass(FlockingParams(cfg), q, p, lq, lp, np.ones((B, N)), partner)
+    out = flocking_pass(flocking_params(cfg), q, p, lq, lp, np.ones((B, N)), partner)
     d = np.linalg.norm(q[:, :, None] - q[:, None, :], axis=-1)  # (B, N, N)
     for b in range(B):
         db = d[b] + np.diag(np.full(N, np.inf))

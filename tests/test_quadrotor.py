@@ -6,6 +6,7 @@ over both vehicle models through the ``dynamics`` fixture in the other test file
 
 from __future__ import annotations
 
+import csv
 import math
 
 import numpy as np
@@ -17,8 +18,11 @@ from baselines.experiments.quadrotor.invariants import (
     orthonormality_over_scenario,
     step_response,
 )
+from baselines.experiments.quadrotor.runs import scenario_metrics
+from baselines.quadrotor_experiment import main
 from pairflock_env import PairFlockCore, make_config, parallel_env
 from pairflock_env.dynamics.quadrotor import QuadrotorModel
+from pairflock_env.dynamics.quadrotor import kernels as Q
 from pairflock_env.math3d import (
     euler_zyx,
     hat,
@@ -376,9 +380,6 @@ def test_so3_exp_hat_vee_and_euler_angles():
 
 # --------------------------------------------------------------------------- experiment CLI
 def test_experiment_cli_writes_table_csv_and_figures(tmp_path):
-    import csv
-
-    from baselines.quadrotor_experiment import main
 
     out = tmp_path / "q"
     rc = main(
@@ -442,7 +443,6 @@ def test_experiment_cli_writes_table_csv_and_figures(tmp_path):
 
 
 def test_turn_peak_since_filter_is_the_time_from_the_last_filter_action_to_the_peak():
-    from baselines.experiments.quadrotor.runs import scenario_metrics
 
     t = np.arange(0.0, 65.0, 0.02)
     err = np.where(np.abs(t - 22.0) < 1e-9, 0.9, 0.1)  # the turn peak at 22 s
@@ -466,9 +466,6 @@ def test_turn_peak_since_filter_is_the_time_from_the_last_filter_action_to_the_p
 
 
 def test_experiment_gains_reach_sliding_mode_and_bad_ones_name_their_flag(tmp_path):
-    import csv
-
-    from baselines.quadrotor_experiment import main
 
     common = ["--policies", "smc", "--dynamics", "quadrotor", "--seeds", "1", "--horizon", "2"]
     common += ["--workers", "1", "--no-figures", "--quiet"]
@@ -488,7 +485,6 @@ def test_experiment_gains_reach_sliding_mode_and_bad_ones_name_their_flag(tmp_pa
 # --------------------------------------------------------------------------- kernel stages
 def test_kernel_stages_match_their_documented_formulas():
     """The scalar stages the kernel is built from, one by one, against numpy."""
-    from pairflock_env.dynamics import quadrotor as Q
 
     prm = QuadrotorModel(make_config("paper-quadrotor"), 1).params
     # 1. acceleration limit, and a non-finite command

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from baselines.reporting.video import write_episode_video
 from pairflock_env.render import SwarmRenderer, fit_limits
 
 RNG = np.random.default_rng(3)
@@ -40,7 +41,6 @@ def test_human_mode_without_a_display_warns_instead_of_failing():
 
 
 def test_video_writer_checks_its_arguments(tmp_path):
-    from baselines.reporting.video import write_episode_video
 
     t = np.arange(3) * 0.1
     pos = np.stack([Q] * 3)

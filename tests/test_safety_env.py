@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import csv
+import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -9,8 +12,9 @@ import pytest
 from view_helpers import VIEWS, make_view, reset_view, step_view, zero_action
 
 from baselines.controllers import make_pair_policy
+from baselines.experiments.benchmark.cli import build_parser, resolve
+from baselines.experiments.safety.figure import closest_pass_figure, read_rows
 from pairflock_env import AGENT_INFO_KEYS, PairFlockConfig, PairFlockCore, make_config
-from pairflock_env.config.sections.quadrotor import REACTION_CYCLES as QUAD_REACTION_CYCLES
 from pairflock_env.config.sections.safety import (
     BOUND_OTHER_SHARE as QUAD_OTHER_SHARE,
 )
@@ -20,6 +24,7 @@ from pairflock_env.config.sections.safety import (
     OTHER_SHARE,
 )
 from pairflock_env.dynamics import VEHICLES
+from pairflock_env.dynamics.quadrotor.section import REACTION_CYCLES as QUAD_REACTION_CYCLES
 from pairflock_env.safety import SafetyParams
 from pairflock_env.safety.stage import SAFETY_INFO_KEYS
 
@@ -260,9 +265,6 @@ def test_safety_infos_in_every_view(kind, mode):
 
 # --------------------------------------------------------------------------- benchmark
 def test_benchmark_safety_suite_runs_filter_off_and_on(tmp_path):
-    import csv
-    import subprocess
-    import sys
 
     out = tmp_path / "safety"
     cmd = [sys.executable, "-m", "baselines.benchmark", "--suite", "safety", "--seeds", "1"]
@@ -289,8 +291,6 @@ def test_benchmark_safety_suite_runs_filter_off_and_on(tmp_path):
     ).stdout
     assert "| smc | ss_mean_error | 1 |" in paired and "| smc | band_time | 1 |" in paired
 
-    from baselines.experiments.safety.figure import closest_pass_figure, read_rows
-
     fig = closest_pass_figure(read_rows([out]), tmp_path / "closest.png")
     assert fig.stat().st_size > 0
     with pytest.raises(ValueError, match="no closest_pass"):
@@ -300,7 +300,6 @@ def test_benchmark_safety_suite_runs_filter_off_and_on(tmp_path):
 
 
 def test_benchmark_set_safety_filter_adds_the_safety_columns_to_every_run():
-    from baselines.experiments.benchmark.cli import build_parser, resolve
 
     parser = build_parser()
     args = parser.parse_args(["--suite", "quick", "--set", "safety_filter=none,cbf"])

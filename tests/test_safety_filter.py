@@ -11,7 +11,7 @@ import scipy.sparse as sp
 from qpsolvers import solve_qp
 from scipy.optimize import minimize, nnls
 
-from pairflock_env import make_config
+from pairflock_env import PairFlockCore, make_config
 from pairflock_env.safety import (
     STATUS_INFEASIBLE,
     STATUS_NOMINAL,
@@ -22,7 +22,15 @@ from pairflock_env.safety import (
     project,
     safety_filter,
 )
-from pairflock_env.safety.cbf.kernels import _far, _far_terms, _sigma_min
+from pairflock_env.safety.cbf.kernels import (
+    BARRIER,
+    WS_DIRECT,
+    _far,
+    _far_terms,
+    _sigma_min,
+    _solve,
+    _solve_ws,
+)
 
 # ----------------------------------------------------------------------------- references
 
@@ -178,7 +186,6 @@ def test_solver_examples_and_bad_input():
 def test_many_constraints_are_solved_on_a_working_set_exactly():
     # K > WS_DIRECT: the working set (16 least satisfied, then the most violated) gives the
     # optimum of the full problem, feasible or not, against the references
-    from pairflock_env.safety.cbf.kernels import WS_DIRECT
 
     rng = np.random.default_rng(9)
     seen = {STATUS_PROJECTED: 0, STATUS_INFEASIBLE: 0}
@@ -202,7 +209,6 @@ def test_many_constraints_are_solved_on_a_working_set_exactly():
 
 
 def _ws_call(un, G, b, U, cap):
-    from pairflock_env.safety.cbf.kernels import _solve_ws
 
     K, D = G.shape
     Gp, up = np.zeros((K, 3)), np.zeros(3)
@@ -216,7 +222,6 @@ def _ws_call(un, G, b, U, cap):
 
 def test_the_working_set_gives_the_full_enumerations_answer():
     # the working set against the enumeration over all K (what the filter ran before it)
-    from pairflock_env.safety.cbf.kernels import _solve
 
     rng = np.random.default_rng(10)
     statuses = set()
@@ -240,7 +245,6 @@ def test_the_working_set_gives_the_full_enumerations_answer():
 def test_a_capped_working_set_reports_the_step_infeasible_with_its_true_margin():
     # the filter stops the working set at WS_MAX: such a step is flagged (no guarantee), its
     # command stays in the ball and its margin is the one over all constraints
-    from pairflock_env.safety.cbf.kernels import WS_DIRECT
 
     rng = np.random.default_rng(11)
     capped = 0
@@ -297,7 +301,6 @@ def test_a_dense_crowd_steps_with_every_command_in_the_ball():
     # 200 UAVs in a 6 m box, a 1 m/s^2 budget, 3-D: every UAV binds. The enumeration's
     # K^4 once took seconds to minutes per step; the working set caps it, and the agents
     # whose set would grow past WS_MAX report the step infeasible
-    from pairflock_env import PairFlockCore
 
     cfg = make_config(
         "paper", n_uavs=200, dim=3, safety_filter="cbf", pair_accel_limit=1.0, init="random",
@@ -314,7 +317,6 @@ def test_a_dense_crowd_steps_with_every_command_in_the_ball():
 @pytest.mark.parametrize("kw", [dict(substeps=2), dict(integrator="exact")])
 def test_coincident_uavs_step_with_substeps_and_the_exact_integrator(kw):
     # the rotation bound of n divides by d + min(d, D_s): 0 for coincident UAVs
-    from pairflock_env import PairFlockCore
 
     core = PairFlockCore(make_config("paper", n_uavs=2, safety_filter="cbf", **kw), seed=0)
     core.reset(seed=0, options={"positions": np.zeros((2, 2))})
@@ -323,7 +325,6 @@ def test_coincident_uavs_step_with_substeps_and_the_exact_integrator(kw):
 
 
 def test_a_subnormal_brake_acceleration_at_the_barrier_stays_finite():
-    from pairflock_env import PairFlockCore
 
     cfg = make_config(
         "paper", n_uavs=2, safety_filter="cbf", safety_brake_accel=5e-324, safety_other_accel=0.0
@@ -575,7 +576,7 @@ def test_skipping_far_uavs_changes_no_command():
         un = rng.normal(0, P.accel_limit, (B, M, D))
         on = SafetyFilter(P, ag, N, mates)
         off = SafetyFilter(P, ag, N, mates)
-        off._pr[9] = 0.0
+        off._pr[BARRIER.index.skip_far] = 0.0
         a, b = on.apply(q, p, f, un), off.apply(q, p, f, un)
         for x, y in zip(a.arrays()[:4], b.arrays()[:4], strict=True):
             assert np.array_equal(x, y)
@@ -628,7 +629,7 @@ def test_the_skip_changes_no_command_at_its_threshold_where_rounding_is_hardest(
         ag, mates = ([0, 1], [1, 0]) if coop else ([0], None)
         on = SafetyFilter(P, ag, 2, mates)
         off = SafetyFilter(P, ag, 2, mates)
-        off._pr[9] = 0.0
+        off._pr[BARRIER.index.skip_far] = 0.0
         if d is None:  # bisect the skip's threshold for this closing speed
             fn = fscale * P.accel_limit
             far = _far_terms(on._pr, fn, coop)
@@ -672,7 +673,7 @@ def test_a_fast_member_of_another_pair_is_not_left_out_by_the_shortened_search()
     P = SafetyParams(accel_limit=50.0, sensing_radius=100.0)
     on = SafetyFilter(P, agents, N, partners)
     off = SafetyFilter(P, agents, N, partners)
-    off._pr[9] = 0.0
+    off._pr[BARRIER.index.skip_far] = 0.0
     f = np.zeros((1, 4, 2))
     un = np.zeros((1, 4, 2))
     un[0, 0] = (50.0, 0.0)  # agent 0 pushes towards the other pair
@@ -839,7 +840,6 @@ def test_partner_is_constrained_beyond_the_sensing_radius():
 
 
 def test_core_filter_senses_each_agents_partner():
-    from pairflock_env import PairFlockCore
 
     core = PairFlockCore(make_config("paper", n_uavs=20, safety_filter="cbf"), num_swarms=1)
     assert np.array_equal(core.safety.filter.partners, core.partner_uavs)

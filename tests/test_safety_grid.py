@@ -10,7 +10,7 @@ import pytest
 from baselines import make_pair_policy
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.safety import SafetyFilter, SafetyParams
-from pairflock_env.safety.cbf.kernels import _far_radius, _far_terms
+from pairflock_env.safety.cbf.kernels import BARRIER, _far_radius, _far_terms, _with_partner
 from pairflock_env.swarm.grid import NeighborGrid
 
 
@@ -38,7 +38,9 @@ def test_grid_gives_the_full_scan_bit_for_bit(D, kw):
     partners = np.array([1, 0, 3, 2, 11, 10])
     filt = SafetyFilter(P, agents, N, partners)
     every = SafetyFilter(P, agents, N, partners)
-    every._pr[9] = 0.0  # the far-UAV skip off: the same commands and flags on the grid too
+    every._pr[BARRIER.index.skip_far] = (
+        0.0  # the far-UAV skip off: the same commands and flags on the grid too
+    )
     for spread in (8.0, 30.0, 200.0):  # dense, medium, partners far apart
         q, p = _case(rng, B, N, D, spread)
         q[0, 5] = q[0, 0]  # a coincident pair
@@ -170,7 +172,6 @@ def test_the_grid_is_really_consulted():
     ],
 )
 def test_partner_is_merged_at_its_index(hits, mate, expected):
-    from pairflock_env.safety.cbf.kernels import _with_partner
 
     buf = np.full(len(hits) + 1, -7, np.int64)
     buf[: len(hits)] = hits

@@ -7,14 +7,19 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
+from pathlib import Path
+
 import gymnasium as gym
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, VecCheckNan, VecEnv, VecMonitor
+from view_helpers import snapshot
 
+import pairflock_env
 from baselines import make_pair_policy
+from baselines.controllers.sb3 import METADATA_KEY
 from baselines.evaluation.rollout import rollout, trace_metrics
 from pairflock_env import ENV_ID, make_config, parallel_env
-from pairflock_env.envs import PairFlockSB3VecEnv
+from pairflock_env.envs import PairFlockSB3VecEnv, sb3
 
 SMALL = dict(n_uavs=12, pair_accel_limit=50.0)
 
@@ -143,7 +148,6 @@ def test_sb3_wrappers_and_ppo_train_on_native_vecenv():
 def test_sb3_loader_in_the_action_slot(tmp_path):
     """make_pair_policy("sb3:<path>", env) loads a model saved with its interface and acts on
     the env's standard observation; it holds its decision for decision_period steps."""
-    from baselines.controllers.sb3 import METADATA_KEY
 
     venv = PairFlockSB3VecEnv(num_swarms=1, **SMALL)
     model = PPO("MlpPolicy", venv, n_steps=8, batch_size=16, n_epochs=1, seed=0, device="cpu")
@@ -177,7 +181,6 @@ def test_sb3_loader_in_the_action_slot(tmp_path):
 def test_committed_policy_keeps_its_budget_in_the_paper_env():
     """models/pair_n20_a50.zip (the README's policy) loads, flies the paper preset whose env
     limit is 1000 m/s^2 and stays within the 50 m/s^2 it was trained for, and closes the pair."""
-    from pathlib import Path
 
     model = Path(__file__).resolve().parents[1] / "models" / "pair_n20_a50.zip"
     cfg = make_config("paper", n_uavs=20, obs_neighbors=12, horizon=8.0)
@@ -188,7 +191,6 @@ def test_committed_policy_keeps_its_budget_in_the_paper_env():
 
 def test_per_swarm_options_are_all_validated_before_any_swarm_resets():
     """Swarm 1's bad options raise before swarm 0 is reset (validate everything, then apply)."""
-    from view_helpers import snapshot
 
     env = PairFlockSB3VecEnv(num_swarms=2, **SMALL)
     env.reset()
@@ -218,8 +220,6 @@ def test_per_swarm_options_are_all_validated_before_any_swarm_resets():
 
 
 def test_names_say_what_they_count_and_old_names_are_gone():
-    import pairflock_env
-    from pairflock_env.envs import sb3
 
     env = PairFlockSB3VecEnv(num_swarms=3, **SMALL)
     assert (env.num_swarms, env.num_rows, env.num_envs, env.agents_per_swarm) == (3, 6, 6, 2)

@@ -10,6 +10,11 @@ import pairflock_env
 from pairflock_env.envs.single import PairFlockGymEnv
 from pairflock_env.envs.vector import PairFlockGymVectorEnv
 
+try:  # the SB3 view needs stable-baselines3 (the train extra)
+    from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
+except ImportError:  # pragma: no cover - depends on the install
+    PairFlockSB3VecEnv = None
+
 #: a small, fast task
 SMALL = dict(n_uavs=8, pair_accel_limit=50.0, max_cycles=40)
 
@@ -28,8 +33,6 @@ def make_view(kind: str, **kw: Any):
     if kind == "vector":
         return PairFlockGymVectorEnv(num_envs=2, **kw)
     if kind == "sb3":
-        from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
-
         return PairFlockSB3VecEnv(num_swarms=2, **kw)
     raise ValueError(kind)
 

@@ -18,9 +18,9 @@ from typing import Any, Protocol
 import numpy as np
 
 from pairflock_env.config.registry import VEHICLES, Plugin
-from pairflock_env.config.sections import quadrotor as quadrotor_section
 from pairflock_env.dynamics.particle import ParticleModel
 from pairflock_env.dynamics.quadrotor import QuadrotorModel
+from pairflock_env.dynamics.quadrotor import section as quadrotor_section
 
 __all__ = [
     "VEHICLES",
@@ -62,7 +62,8 @@ class Vehicle(Plugin):
         accel_bound: the acceleration it can realise for a config (m/s^2; None: unbounded);
             the safety filter's unset braking bounds stay within it.
         reaction_time: how late it realises a command (s; None: at once); the filter's
-            default reaction time.
+            default reaction time. It must lie in [0, ``MAX_REACTION_TIME``] for every config
+            the vehicle's section accepts (the quadrotor's section has the rule).
         safety_decay: the filter's default barrier rate on it (None: the filter's own).
         info_keys: the keys of ``model.info()``.
     """
@@ -94,6 +95,8 @@ VEHICLES.register(
         doc="6-DOF rigid body with rotor lag behind a geometric attitude controller "
         "(docs/quadrotor.md)",
         section=quadrotor_section.QUADROTOR,
+        rules=quadrotor_section.RULES,
+        derived=quadrotor_section.DERIVED,
         model=QuadrotorModel,
         dims=(3,),
         substeps=quadrotor_section.min_substeps,

@@ -11,8 +11,8 @@ are imported only by code that needs them). Every view is a
 import importlib
 from typing import Any
 
-from pairflock_env.envs.aec import PairFlockAECEnv
-from pairflock_env.envs.parallel import PairFlockParallelEnv, agent_name, env, parallel_env, raw_env
+from pairflock_env.envs.aec import PairFlockAECEnv, env, raw_env
+from pairflock_env.envs.parallel import PairFlockParallelEnv, agent_name, parallel_env
 from pairflock_env.envs.single import ENV_ID, PairFlockGymEnv
 from pairflock_env.envs.vector import PairFlockGymVectorEnv
 

@@ -17,9 +17,9 @@ import numpy as np
 from pettingzoo.utils.conversions import parallel_to_aec_wrapper
 from pettingzoo.utils.wrappers import OrderEnforcingWrapper
 
-from pairflock_env.envs.parallel import PairFlockParallelEnv
+from pairflock_env.envs.parallel import PairFlockParallelEnv, parallel_env
 
-__all__ = ["PairFlockAECEnv", "PairFlockOrderEnforcing"]
+__all__ = ["PairFlockAECEnv", "PairFlockOrderEnforcing", "env", "raw_env"]
 
 _ENDED = "the episode has ended; call reset()"
 
@@ -89,3 +89,13 @@ class PairFlockOrderEnforcing(OrderEnforcingWrapper):
         if self.render_mode is not None:
             self._require_reset("render")
         return self.env.render()  # PettingZoo's wrapper would assert a reset first
+
+
+def raw_env(**kwargs: Any) -> PairFlockOrderEnforcing:
+    """The AEC env over the parallel env (order enforced; see :class:`PairFlockAECEnv`)."""
+    return PairFlockOrderEnforcing(PairFlockAECEnv(parallel_env(**kwargs)))
+
+
+def env(**kwargs: Any) -> PairFlockOrderEnforcing:
+    """The AEC env (PettingZoo's standard entry point)."""
+    return raw_env(**kwargs)

@@ -16,7 +16,7 @@ from pairflock_env.seeding import check_seed
 from pairflock_env.task.observations import ObsLayout
 from pairflock_env.task.spaces import StateLayout, global_state, state_bounds
 
-__all__ = ["PairFlockParallelEnv", "agent_name", "env", "parallel_env", "raw_env"]
+__all__ = ["PairFlockParallelEnv", "agent_name", "parallel_env"]
 
 
 #: dtypes that real_array takes as they are (real, at most 64 bits): copied into float64 exactly
@@ -345,16 +345,3 @@ class PairFlockParallelEnv(SwarmView, ParallelEnv):
 def parallel_env(**kwargs: Any) -> PairFlockParallelEnv:
     """The PettingZoo ParallelEnv (see :class:`PairFlockParallelEnv` for arguments)."""
     return PairFlockParallelEnv(**kwargs)
-
-
-def raw_env(**kwargs: Any):
-    """The AEC env over the parallel env (order enforced; see
-    :class:`~pairflock_env.envs.aec.PairFlockAECEnv`)."""
-    from pairflock_env.envs.aec import PairFlockAECEnv, PairFlockOrderEnforcing
-
-    return PairFlockOrderEnforcing(PairFlockAECEnv(parallel_env(**kwargs)))
-
-
-def env(**kwargs: Any):
-    """The AEC env (PettingZoo's standard entry point)."""
-    return raw_env(**kwargs)

@@ -237,7 +237,7 @@ class PairInterface(LearningInterface):
         r -= p.w_separation * np.maximum(0.0, p.separation_distance - sep) / p.separation_distance
         r -= p.w_collision * (sep < cfg.collision_distance)
         # a UAV with no other UAV at all (n_uavs = 2) has no flock to leave
-        far = np.where(np.isfinite(sep), np.maximum(0.0, sep - p.cohesion_distance), 0.0)
+        far = np.maximum(0.0, sep - p.cohesion_distance) if cfg.n_uavs > 2 else 0.0
         r -= p.w_cohesion * far / p.position_scale
         diverged = np.asarray(info["diverged"], dtype=bool)
         r[diverged] = -DIVERGENCE_PENALTY

@@ -35,63 +35,68 @@ from collections import namedtuple
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig
+from pairflock_env.kernels import KernelParams, jit_inline, jit_kernel
 from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
     check_grid,
     dist2,
-    jit_inline,
-    jit_kernel,
     nearest_d2,
     one_ring,
     ring_bound2,
 )
-from pairflock_env.swarm.pair_pass import pair_pass  # re-exported: the pair pass lived here before
 
-__all__ = ["FlockScalars", "FlockingParams", "flocking_pass", "pair_pass"]
+__all__ = ["FLOCKING", "FlockScalars", "flocking_params", "flocking_pass"]
 
-FlockScalars = namedtuple(
-    "FlockScalars", ["a", "b_r", "inv_s2", "r2", "cons", "c1", "c2", "coll2", "limit"]
+#: the flocking pass's parameters, as its kernels receive them (names of the config, squared
+#: where the kernels compare squared distances)
+FLOCKING = KernelParams(
+    "Flocking",
+    (
+        "attraction",
+        "repulsion",
+        "inv_sigma2",
+        "radius2",
+        "consensus",
+        "pin_position_gain",
+        "pin_velocity_gain",
+        "collision_distance2",
+        "divergence_limit",
+    ),
 )
-FlockScalars.__doc__ = "The scalar parameters of the flocking pass, as the kernels read them."
+FlockScalars = namedtuple("FlockScalars", FLOCKING.names)
+FlockScalars.__doc__ = "The flocking parameters held in registers by the kernels."
+_F = FLOCKING.index
 
 
-class FlockingParams:
-    """Scalar parameters of the flocking pass, unpacked once from a config.
-
-    Attributes ``a``, ``b_r``, ``inv_sigma2``, ``r2``, ``consensus``, ``c1``, ``c2``,
-    ``coll2``, ``limit`` read one float64 vector (``vector``, in :data:`FlockScalars` order),
-    which is what the kernels receive.
-    """
-
-    __slots__ = ("vector",)
-
-    def __init__(self, cfg: PairFlockConfig) -> None:
-        self.vector = np.array(
-            [
-                cfg.attraction,
-                cfg.repulsion,
-                1.0 / cfg.repulsion_sigma2,
-                cfg.radius**2,
-                cfg.consensus,
-                cfg.pin_position_gain,
-                cfg.pin_velocity_gain,
-                cfg.collision_distance**2,
-                cfg.divergence_limit,
-            ],
-            dtype=np.float64,
-        )
-
-
-for _k, _name in enumerate(
-    ("a", "b_r", "inv_sigma2", "r2", "consensus", "c1", "c2", "coll2", "limit")
-):
-    setattr(FlockingParams, _name, property(lambda self, k=_k: float(self.vector[k])))
+def flocking_params(cfg: PairFlockConfig) -> np.ndarray:
+    """The flocking pass's parameter vector (:data:`FLOCKING`) of a config."""
+    return FLOCKING.pack(
+        attraction=cfg.attraction,
+        repulsion=cfg.repulsion,
+        inv_sigma2=1.0 / cfg.repulsion_sigma2,
+        radius2=cfg.radius**2,
+        consensus=cfg.consensus,
+        pin_position_gain=cfg.pin_position_gain,
+        pin_velocity_gain=cfg.pin_velocity_gain,
+        collision_distance2=cfg.collision_distance**2,
+        divergence_limit=cfg.divergence_limit,
+    )
 
 
 @jit_inline
 def _scalars(v):
-    return FlockScalars(v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8])
+    return FlockScalars(
+        v[_F.attraction],
+        v[_F.repulsion],
+        v[_F.inv_sigma2],
+        v[_F.radius2],
+        v[_F.consensus],
+        v[_F.pin_position_gain],
+        v[_F.pin_velocity_gain],
+        v[_F.collision_distance2],
+        v[_F.divergence_limit],
+    )
 
 
 # ---------------------------------------------------------------------------------------
@@ -140,10 +145,11 @@ def _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size):
         for k in range(D):
             x = q[b, i, k]
             v = p[b, i, k]
-            if not (abs(x) <= prm.limit and abs(v) <= prm.limit):
+            if not (abs(x) <= prm.divergence_limit and abs(v) <= prm.divergence_limit):
                 is_bad = True
             acc[b, i, k] = h[b, i] * (
-                prm.c1 * (ql[b, k] - q[b, i, k]) + prm.c2 * (pl[b, k] - p[b, i, k])
+                prm.pin_position_gain * (ql[b, k] - q[b, i, k])
+                + prm.pin_velocity_gain * (pl[b, k] - p[b, i, k])
             )
     return is_bad
 
@@ -181,9 +187,9 @@ def _largest_component(parent, size):
 @jit_inline
 def _pair_force(q, p, prm, b, i, j, d2, acc):
     """Eqs. 13-18 for the neighbours i < j: symmetric, so f_ij = -f_ji."""
-    w = prm.a - prm.b_r * np.exp(-d2 * prm.inv_s2)
+    w = prm.attraction - prm.repulsion * np.exp(-d2 * prm.inv_sigma2)
     for k in range(q.shape[2]):
-        f = w * (q[b, j, k] - q[b, i, k]) + prm.cons * (p[b, j, k] - p[b, i, k])
+        f = w * (q[b, j, k] - q[b, i, k]) + prm.consensus * (p[b, j, k] - p[b, i, k])
         acc[b, i, k] += f
         acc[b, j, k] -= f
 
@@ -208,9 +214,9 @@ def _pass_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size):
         for j in range(i + 1, N):
             d2 = dist2(q, b, i, j)
             _separation(min_d2, b, i, j, pi, d2)
-            if d2 < prm.coll2:
+            if d2 < prm.collision_distance2:
                 nc += 1
-            if d2 < prm.r2:
+            if d2 < prm.radius2:
                 _pair_force(q, p, prm, b, i, j, d2, acc)
                 _union(parent, size, i, j)
     return nc
@@ -249,9 +255,9 @@ def _pass_grid(q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2)
                 j = g.order[b, s]
                 d2 = dist2(q, b, i, j)
                 _separation(min_d2, b, i, j, pi, d2)
-                if d2 < prm.coll2:
+                if d2 < prm.collision_distance2:
                     nc += 1
-                if d2 < prm.r2:
+                if d2 < prm.radius2:
                     _union(parent, size, i, j)
                     nb_j[n] = j
                     nb_d2[n] = d2
@@ -321,7 +327,7 @@ def _flocking_grid_kernel(
 
 
 def flocking_pass(
-    params: FlockingParams,
+    params: np.ndarray,
     q: np.ndarray,
     p: np.ndarray,
     leader_q: np.ndarray,
@@ -334,6 +340,7 @@ def flocking_pass(
     """Flocking acceleration and proximity quantities of every UAV.
 
     Args:
+        params: the parameter vector of :func:`flocking_params`.
         q, p: positions and velocities, (B, N, dim) float64.
         leader_q, leader_p: virtual leader, (B, dim).
         pinned: h_i of eq. 6 as 0/1 floats, (B, N).
@@ -351,7 +358,12 @@ def flocking_pass(
         paired). Per-swarm sums run sequentially, so results do not depend on B.
     """
     B, N, D = q.shape
-    check_grid(grid, q.shape, max(params.r2, params.coll2), "max(radius, collision_distance)")
+    check_grid(
+        grid,
+        q.shape,
+        max(params[_F.radius2], params[_F.collision_distance2]),
+        "max(radius, collision_distance)",
+    )
     if out is None or out["acc"].shape != q.shape:
         out = {
             "acc": np.empty((B, N, D)),
@@ -373,7 +385,7 @@ def flocking_pass(
         leader_p,
         pinned,
         partner,
-        params.vector,
+        params,
         out["acc"],
         out["min_d2"],
         out["collisions"],

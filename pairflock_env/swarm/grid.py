@@ -24,11 +24,11 @@ lets the flocking pass reproduce the all-pairs summation order bit for bit.
 
 from __future__ import annotations
 
-import functools
 from collections import namedtuple
 
 import numpy as np
-from numba import njit
+
+from pairflock_env.kernels import jit_inline, jit_kernel
 
 __all__ = ["GridArrays", "NeighborGrid", "nearest_indices"]
 
@@ -41,12 +41,6 @@ _CELL_MARGIN = 1e-3
 _ROUNDING = 1e-4
 _MAX_CELLS = 2.0**36
 
-# Every kernel here and in the passes is compiled without numba's reference counting: they
-# never allocate, and the count updates that numba adds around inlined helpers taking arrays
-# inside branchy loops (which its pruning pass cannot remove, numba issue #2350) cost 5-30x
-# in the pair loops.
-jit_kernel = functools.partial(njit, cache=True, nogil=True, _nrt=False)
-jit_inline = functools.partial(njit, cache=True, inline="always", _nrt=False)
 
 GridArrays = namedtuple(
     "GridArrays",

@@ -10,13 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from pairflock_env.kernels import jit_inline, jit_kernel
 from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
     check_grid,
     dist2,
-    jit_inline,
-    jit_kernel,
     k_nearest_all_pairs,
     k_nearest_grid,
     one_ring,

@@ -20,9 +20,11 @@ from __future__ import annotations
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig
-from pairflock_env.swarm.flocking import FlockingParams, flocking_pass, pair_pass
+from pairflock_env.swarm.flocking import flocking_params, flocking_pass
 from pairflock_env.swarm.grid import NeighborGrid
+from pairflock_env.swarm.pair_pass import pair_pass
 from pairflock_env.task.pairing import agent_pair_state
+from pairflock_env.task.spaces import separation_bound
 
 __all__ = ["NeighborPass", "make_grid"]
 
@@ -52,7 +54,7 @@ class NeighborPass:
     def __init__(self, cfg: PairFlockConfig, num_swarms: int) -> None:
         pairs = np.asarray(cfg.pairs, dtype=np.int64)  # (P, 2)
         self.cfg = cfg
-        self.params = FlockingParams(cfg)
+        self.params = flocking_params(cfg)
         self.agent_uavs = pairs.reshape(-1).copy()
         self.partner_uavs = pairs[:, ::-1].reshape(-1).copy()
         self.agent_pair = np.repeat(np.arange(len(pairs)), 2)
@@ -74,11 +76,13 @@ class NeighborPass:
         """Run the neighbour pass over the state q, p (B, N, dim) with the leader at
         ``leader_q``, ``leader_p``.
 
-        Returns the flocking outputs (:func:`~pairflock_env.swarm.flocking.flocking_pass`) and the
-        agents' pair quantities (B, M): those of
-        :func:`~pairflock_env.task.pairing.agent_pair_state`, plus ``min_separation`` (distance to
-        the nearest non-partner UAV, m) and ``shared_neighbors`` (eq. 28). The observation's
-        neighbour slots are in :attr:`pair_out`.
+        Returns the flocking outputs (:func:`~pairflock_env.swarm.flocking.flocking_pass`)
+        and the agents' pair quantities (B, M): those of
+        :func:`~pairflock_env.task.pairing.agent_pair_state`, plus ``min_separation``
+        (distance to the nearest non-partner UAV, m; with no other UAV, n_uavs = 2, the
+        largest finite separation :func:`~pairflock_env.task.spaces.separation_bound`, so
+        infos stay finite) and ``shared_neighbors`` (eq. 28). The observation's neighbour
+        slots are in :attr:`pair_out`.
         """
         cfg, g = self.cfg, self.grid
         ia, ip = self.agent_uavs, self.partner_uavs
@@ -91,6 +95,8 @@ class NeighborPass:
             q, p, ia, ip, cfg.radius, cfg.obs_neighbors, out=self.pair_out, grid=g
         )
         pair = agent_pair_state(q, p, ia, ip, self.agent_dm, cfg.surface_slope)
-        pair["min_separation"] = np.sqrt(fl["min_d2"][:, ia])
+        pair["min_separation"] = sep = np.sqrt(fl["min_d2"][:, ia])
+        if cfg.n_uavs == 2:  # no non-partner UAV at all: the largest finite separation
+            sep[:] = separation_bound(cfg)
         pair["shared_neighbors"] = pp["shared"][:, self.agent_pair]
         return fl, pair

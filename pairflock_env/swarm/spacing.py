@@ -13,12 +13,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from pairflock_env.kernels import jit_inline, jit_kernel
 from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
     dist2,
-    jit_inline,
-    jit_kernel,
     one_ring,
 )
 

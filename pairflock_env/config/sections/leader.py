@@ -7,7 +7,6 @@ from typing import Any
 import numpy as np
 
 from pairflock_env.config.fields import (
-    Choice,
     Field,
     Kind,
     OrNone,
@@ -17,6 +16,7 @@ from pairflock_env.config.fields import (
     sequence_items,
 )
 from pairflock_env.config.limits import MAX_POSITION, MAX_SPEED, MAX_TIME, MAX_TURNS
+from pairflock_env.config.registry import LEADERS, Registered
 from pairflock_env.config.schema import Rule, Section
 
 __all__ = ["RULES", "SECTIONS"]
@@ -77,7 +77,7 @@ LEADER = Section(
     (
         Field(
             "leader",
-            Choice(("constant_velocity", "climb_and_turn")),
+            Registered(LEADERS, after_sections=True),
             "constant_velocity",
             "",
             'Leader trajectory: "constant_velocity" or "climb_and_turn" (Sec. VI-B: climb, level '

@@ -195,18 +195,6 @@ def _radius_beyond_distance(v: Any) -> str | None:
     return None
 
 
-def _derived_reaction_time_in_range(v: Any) -> str | None:
-    if v.safety_filter == "none" or v.safety_reaction_time is not None:
-        return None
-    tau = reaction_time(v)
-    if not tau <= MAX_REACTION_TIME:
-        return (
-            f"makes the unset safety_reaction_time (the {v.dynamics} model's lag) {tau:g} s, "
-            f"above the {MAX_REACTION_TIME:g} s it may be; set safety_reaction_time"
-        )
-    return None
-
-
 RULES = (
     Rule(
         ("safety_brake_accel", "pair_accel_limit"),
@@ -227,10 +215,5 @@ RULES = (
         ("safety_sensing_radius", "safety_distance", "safety_margin"),
         _radius_beyond_distance,
         "safety_sensing_radius > safety_distance + safety_margin",
-    ),
-    Rule(
-        ("safety_reaction_time", "safety_filter", "dynamics"),
-        _derived_reaction_time_in_range,
-        "the vehicle's derived safety_reaction_time (quadrotor: 1.5 / quad_attitude_freq) <= 10 s",
     ),
 )

@@ -33,7 +33,7 @@ import functools
 import numpy as np
 import numpy.typing as npt
 
-from pairflock_env.safety.cbf.kernels import _filter_kernel
+from pairflock_env.safety.cbf.kernels import BARRIER, _filter_kernel
 from pairflock_env.safety.cbf.params import SafetyParams
 from pairflock_env.swarm.grid import NeighborGrid
 
@@ -119,19 +119,18 @@ class SafetyFilter:
         self.cooperative = np.zeros(self.n_uavs, np.bool_)
         self.cooperative[self.agents] = True
         P = params
-        self._pr = np.array(
-            [
-                P.barrier_distance,
-                P.brake_accel,
-                P.other_accel,
-                P.sensing_radius**2,
-                P.decay,
-                P.dt,
-                P.position_gain,
-                P.accel_limit,
-                P.reaction_time,
-                1.0,  # skip the UAVs too far to bind (_kernels._far); 0: evaluate them all
-            ]
+        #: the kernel's parameters (:data:`~pairflock_env.safety.cbf.kernels.BARRIER`)
+        self._pr = BARRIER.pack(
+            barrier_distance=P.barrier_distance,
+            brake_accel=P.brake_accel,
+            other_accel=P.other_accel,
+            sensing_radius2=P.sensing_radius**2,
+            decay=P.decay,
+            dt=P.dt,
+            position_gain=P.position_gain,
+            accel_limit=P.accel_limit,
+            reaction_time=P.reaction_time,
+            skip_far=1.0,
         )
 
     def allocate(self, num_swarms: int, dim: int) -> SafetyOutput:

@@ -5,7 +5,7 @@ They live in one module on purpose: numba's on-disk cache keys a compiled functi
 own source file only, so a kernel calling a jitted function from another file could keep
 running a stale compiled copy of it after that file changed. The one call out is the grid
 query ``within_radius`` of :mod:`pairflock_env.swarm.grid` (one neighbour search for the whole
-project), as in the flocking passes: after editing ``neighbors.py``, clear the numba cache
+project), as in the flocking passes: after editing ``swarm/grid.py``, clear the numba cache
 (the ``__pycache__`` folders) before trusting a run of the filter on the grid.
 """
 
@@ -14,7 +14,28 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from pairflock_env.kernels import KernelParams
 from pairflock_env.swarm.grid import within_radius
+
+#: the barrier kernel's parameters (:class:`~pairflock_env.safety.cbf.params.SafetyParams`,
+#: squared where the kernel compares squared distances; ``skip_far`` 1 drops the UAVs too
+#: far to bind (:func:`_far`), 0 evaluates them all)
+BARRIER = KernelParams(
+    "Barrier",
+    (
+        "barrier_distance",
+        "brake_accel",
+        "other_accel",
+        "sensing_radius2",
+        "decay",
+        "dt",
+        "position_gain",
+        "accel_limit",
+        "reaction_time",
+        "skip_far",
+    ),
+)
+_B = BARRIER.index
 
 #: the nominal command satisfied every constraint and the bound (returned unchanged)
 STATUS_NOMINAL = 0
@@ -457,7 +478,9 @@ def _far_terms(pr, fn, coop):
     """The constants of :func:`_far` for an agent whose flocking command has norm fn, against
     an unpaired UAV (``coop`` False) or another filtered one (True); entry 6 is S, the bound
     on the relative acceleration, and entry 10 the barrier's alpha_ij."""
-    Ds, alpha, A_o, lam, T, c, U, tau = pr[0], pr[1], pr[2], pr[4], pr[5], pr[6], pr[7], pr[8]
+    Ds, alpha, A_o = pr[_B.barrier_distance], pr[_B.brake_accel], pr[_B.other_accel]
+    lam, T, c, U = pr[_B.decay], pr[_B.dt], pr[_B.position_gain], pr[_B.accel_limit]
+    tau = pr[_B.reaction_time]
     # the barrier's alpha_ij, and S: the constraint is dropped when sigma_min <= -S
     a = 2.0 * alpha if coop else alpha - A_o
     S = 2.0 * (fn + U) if coop else fn + U + A_o
@@ -466,7 +489,7 @@ def _far_terms(pr, fn, coop):
     return (
         Ds, T, tau, lam, (c - 0.5) * a * T, cT2 + tau * T, S,
         2.0 * (1.0 - c) * T * S, 1.0 / den if den > 0.0 else np.inf, 2.0 / lam, a,
-        _FAR_ROUND / cT2 if cT2 > 0.0 else np.inf, np.sqrt(pr[3]),
+        _FAR_ROUND / cT2 if cT2 > 0.0 else np.inf, np.sqrt(pr[_B.sensing_radius2]),
     )  # fmt: skip
 
 
@@ -539,9 +562,10 @@ def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt, vo
     filtered UAVs, inf if unknown) and ``M`` (the number of filtered UAVs): the
     UAVs left out are ones the skip would drop, so the constraints are the same."""
     N, D = q.shape[1], q.shape[2]
-    Ds, A_o, R2, lam, T, c, U = pr[0], pr[2], pr[3], pr[4], pr[5], pr[6], pr[7]
-    tau = pr[8]
-    prune = pr[9] != 0.0
+    Ds, A_o, R2 = pr[_B.barrier_distance], pr[_B.other_accel], pr[_B.sensing_radius2]
+    lam, T, c, U = pr[_B.decay], pr[_B.dt], pr[_B.position_gain], pr[_B.accel_limit]
+    tau = pr[_B.reaction_time]
+    prune = pr[_B.skip_far] != 0.0
     K = 0
     hmin = np.inf
     fn = 0.0
@@ -637,7 +661,7 @@ def _filter_kernel(
     N = q.shape[1]
     hits = np.zeros(max(N, 1), np.int64)
     pt = np.zeros(3)
-    U = pr[7]
+    U = pr[_B.accel_limit]
     G = np.zeros((max(N, 1), 3))
     rhs = np.zeros(max(N, 1))
     W = np.zeros((4, 4, 4))
@@ -654,7 +678,7 @@ def _filter_kernel(
     for b in range(B):
         grid = use_grid and _grid_usable(q, p, b, g)
         # only the skip uses the speed bounds
-        vo, vc = _speed_bounds(p, b, coop) if pr[9] != 0.0 else (np.inf, np.inf)
+        vo, vc = _speed_bounds(p, b, coop) if pr[_B.skip_far] != 0.0 else (np.inf, np.inf)
         for m in range(M):
             K, h, ok = _constraints(
                 b, agents[m], mates[m], q, p, f[b, m], coop, pr, G, rhs, nv, grid, g, hits, pt,

@@ -18,6 +18,7 @@ from pairflock_env.config.sections.timing import physics_dt
 
 __all__ = [
     "DERIVED",
+    "QUADROTOR",
     "RULES",
     "SECTIONS",
     "accel_bound",
