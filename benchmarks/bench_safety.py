@@ -356,9 +356,7 @@ def filter_table(N: int, B: int, limit: float, repeats: int, min_time: float) ->
     cfg, core, filt, cases = states(N, B, limit, {})
     buf = filt.allocate(B, cfg.dim)
     full = SafetyFilter(filt.params, core.agent_uavs, N, core.partner_uavs)
-    full._pr[BARRIER.index.skip_far] = (
-        0.0  # the kernel's skip switch (_kernels._far): evaluate every UAV
-    )
+    full._pr[BARRIER.index.skip_far] = 0.0  # the kernel's far-UAV skip off: every UAV
     buf_full = full.allocate(B, cfg.dim)
     actions = np.zeros((B, core.n_agents, cfg.dim))
 
