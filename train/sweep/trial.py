@@ -31,6 +31,7 @@ from typing import Any
 
 from baselines import make_pair_policy
 from baselines.reporting.criteria import LEARNED, TARGETS, check_learned
+from baselines.runtime.cli import ArgumentParser
 from baselines.runtime.files import write_csv, write_json
 from baselines.runtime.threads import pin_threads
 from train.callbacks import GracefulInterrupt
@@ -280,16 +281,15 @@ def _watch_parent(parent: int) -> None:
 def worker_main(argv: Sequence[str] | None = None) -> int:
     """Worker of the local backend (``python -m train.sweep.worker SWEEP_DIR NAME``): run the
     trial NAME of the sweep in SWEEP_DIR; exit status 0 (done), 130 (stopped), 2 (bad input)."""
-    args = list(sys.argv[1:] if argv is None else argv)
-    if len(args) != 2:
-        print("usage: python -m train.sweep.worker SWEEP_DIR TRIAL_NAME", file=sys.stderr)
-        return 2
-    sweep_dir, name = Path(args[0]), args[1]
+    parser = ArgumentParser(prog="python -m train.sweep.worker", description="one sweep trial")
+    parser.add_argument("sweep_dir", type=Path, help="the sweep's directory")
+    parser.add_argument("trial", help="the trial's name, e.g. default/seed_0")
+    args = parser.parse_args(argv)
+    sweep_dir, name = args.sweep_dir, args.trial
     stored = json.loads((sweep_dir / SWEEP_FILE).read_text(encoding="utf-8"))
     match = [t for t in stored["trials"] if t["name"] == name]
     if not match:
-        print(f"trial {name!r} is not in {sweep_dir / SWEEP_FILE}", file=sys.stderr)
-        return 2
+        parser.error(f"trial {name!r} is not in {sweep_dir / SWEEP_FILE}")
     _watch_parent(os.getppid())
     with GracefulInterrupt() as interrupt:
         result = run_trial(match[0], sweep_dir, interrupt)
