@@ -106,3 +106,6 @@ VEHICLES.register(
         info_keys=QuadrotorModel.INFO_KEYS,
     )
 )
+
+# plug-in vehicles of this package, registered through the same seam (their own sections)
+from pairflock_env.dynamics import crazyflie as _crazyflie  # noqa: E402, F401

@@ -28,6 +28,7 @@ interrupted run leaves readable recordings that say they are incomplete.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import string
 import weakref
@@ -75,18 +76,19 @@ def _check_name(name: Any) -> str:
     return name
 
 
-def _check_folder(folder: Any) -> str:
+def _check_folder(folder: Any, allow_existing: bool) -> str:
     if not isinstance(folder, (str, os.PathLike)):
         raise TypeError(f"path={folder!r}: expected a str or os.PathLike folder name")
     folder = os.fspath(folder)
     if os.path.exists(folder) and not os.path.isdir(folder):
         raise ValueError(f"path={folder!r} is a file; expected a folder for the recordings")
-    if os.path.isdir(folder):
+    if os.path.isdir(folder) and not allow_existing:
         old = sorted(e for e in os.listdir(folder) if e.endswith(".pfrec"))
         if old:
             raise ValueError(
                 f"path={folder!r} already holds recordings ({', '.join(old[:3])}"
-                f"{', ...' if len(old) > 3 else ''}); expected a new folder or one without any"
+                f"{', ...' if len(old) > 3 else ''}); expected a new folder or one without any "
+                "(or allow_existing=True)"
             )
     return folder
 
@@ -95,7 +97,9 @@ class CoreRecorder:
     """Writes one recording per swarm and episode of a core (see the module docstring).
 
     Args:
-        path: the folder of the recordings (created if missing; must hold no ``.pfrec`` yet).
+        path: the folder of the recordings (created if missing; must hold no ``.pfrec`` yet
+            unless ``allow_existing``: several recorders filling one folder, with names
+            that differ, e.g. one per seed).
         controller: the name of what chose the pair actions (``"smc"``, ``"sb3:..."``).
         every: record one core step in ``every`` (the last step of an episode always).
         swarms: the swarms to record (default: all).
@@ -128,8 +132,9 @@ class CoreRecorder:
         flush_seconds: float = 2.0,
         fsync: bool = False,
         metadata: Mapping[str, Any] | None = None,
+        allow_existing: bool = False,
     ) -> None:
-        self.folder = _check_folder(path)
+        self.folder = _check_folder(path, bool(allow_existing))
         if controller is not None and not isinstance(controller, str):
             raise TypeError(f"controller={controller!r}: expected a str (its name) or None")
         self.controller = controller
@@ -173,7 +178,7 @@ class CoreRecorder:
         cfg = core.config
         self.core = core
         self._pairs = np.asarray(core.agent_uavs).reshape(-1, 2)  # agents A0, B0, A1, B1, ...
-        self._pair_rows = np.arange(0, core.n_agents, 2)  # the A agent of each pair
+        self._swarm_keys: list[str] | None = None
         self._pair_target = np.asarray(cfg.d_m_array, float)
         self._safety = cfg.safety_filter != "none"
         self._config = cfg.to_dict()
@@ -251,7 +256,7 @@ class CoreRecorder:
                 continue
             self._open[b] = self._new_writer(b, entry)
             self._episodes[b] += 1
-        self._append(rows, res, np.zeros(core.num_swarms, bool))
+        self._append(rows.tolist(), res, np.zeros(core.num_swarms, bool))
 
     def _new_writer(self, b: int, seed: Any) -> RecordingWriter:
         core, n = self.core, int(self._episodes[b])
@@ -288,49 +293,53 @@ class CoreRecorder:
         if not self._open:
             return
         done = np.asarray(res.terminated) | np.asarray(res.truncated)
-        rows = np.array(sorted(self._open), np.int64)
+        rows = sorted(self._open)
         self._append(rows, res, done)
-        for b in rows[done[rows]].tolist():
+        for b in [b for b in rows if done[b]]:
             w = self._open.pop(b)
             w.manifest["metadata"]["ended_by"] = "terminated" if res.terminated[b] else "truncated"
             w.close(complete=True)
 
-    def _append(self, rows: np.ndarray, res: Any, done: np.ndarray) -> None:
-        core = self.core
-        steps = core.steps
-        due = [
-            b for b in rows.tolist() if b in self._open and (steps[b] % self.every == 0 or done[b])
-        ]
+    def _append(self, rows: list[int], res: Any, done: np.ndarray) -> None:
+        core, every, writers = self.core, self.every, self._open
+        steps, ended = core.steps.tolist(), done.tolist()
+        due = [b for b in rows if b in writers and (steps[b] % every == 0 or ended[b])]
         if not due:
             return
         info = res.info
+        if self._swarm_keys is None:  # the per-swarm infos: (B,) arrays
+            B = core.num_swarms
+            self._swarm_keys = [k for k, v in info.items() if np.ndim(v) == 1 and len(v) == B]
         lq, lp = core.leader_state()
         closest = core.closest_distance
-        B, pr, au = core.num_swarms, self._pair_rows, core.agent_uavs
-        per_swarm = [k for k, v in info.items() if np.ndim(v) == 1 and len(v) == B]
+        t = core.t.tolist()
         for b in due:
             arrays = dict(
                 leader_position=lq[b],
                 leader_velocity=lp[b],
-                pair_distance=info["pair_distance"][b, pr],
-                pair_error=info["pair_error"][b, pr],
+                pair_distance=info["pair_distance"][b, ::2],  # the A agent of each pair
+                pair_error=info["pair_error"][b, ::2],
                 closest_distance=closest[b],
             )
             if self._safety:
-                active = np.zeros(core.config.n_uavs, bool)
-                active[au] = info["safety_active"][b]
-                corr = np.zeros(core.config.n_uavs)
-                corr[au] = info["safety_correction"][b]
-                arrays.update(safety_active=active, safety_correction=corr)
-            self._open[b].append(
-                int(steps[b]),
-                force=bool(done[b]),
-                time=float(core.t[b]),
+                arrays.update(self._safety_per_uav(info, b))
+            writers[b].append(
+                steps[b],
+                force=ended[b],
+                time=t[b],
                 positions=core.q[b],
                 velocities=core.p[b],
-                infos={k: info[k][b] for k in per_swarm},
+                infos={k: info[k][b] for k in self._swarm_keys},
                 **arrays,
             )
+
+    def _safety_per_uav(self, info: Mapping[str, np.ndarray], b: int) -> dict[str, np.ndarray]:
+        """The safety stage's per-agent infos of swarm ``b`` on the UAVs (0 elsewhere)."""
+        n, au = self.core.config.n_uavs, self.core.agent_uavs
+        active, corr = np.zeros(n, bool), np.zeros(n)
+        active[au] = info["safety_active"][b]
+        corr[au] = info["safety_correction"][b]
+        return dict(safety_active=active, safety_correction=corr)
 
     def __call__(self, k: int, core: Any, res: Any, live: Any = None) -> None:
         """A rollout's per-step callback: ``k = 0`` after the reset of every swarm (seeded
@@ -379,7 +388,9 @@ def _close_open(writers: dict[int, RecordingWriter], state: dict[str, Any]) -> N
     """At exit (or when the recorder is collected): close what is still open, incomplete."""
     reason = state["stopped"] or "the process ended before the episode ended"
     while writers:
-        writers.popitem()[1].close(complete=False, stopped=reason)
+        writer = writers.popitem()[1]
+        with contextlib.suppress(OSError):  # its folder was removed meanwhile: nothing to mark
+            writer.close(complete=False, stopped=reason)
 
 
 def record_core(core: Any, path: str | os.PathLike, **options: Any) -> CoreRecorder:

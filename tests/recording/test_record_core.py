@@ -66,3 +66,15 @@ def test_one_recorder_one_core(tmp_path):
     with pytest.raises(ValueError, match="seeds has 2 entries"):
         CoreRecorder(tmp_path / "x", seeds=[1, 2]).bind(a)
     rec.close()
+
+
+def test_several_recorders_fill_one_folder(tmp_path):
+    """Like a command line's jobs: each records its own seeds into the run's folder."""
+    cfg = make_config("paper", n_uavs=6, max_cycles=5)
+    for block in ([0, 1], [2]):
+        with CoreRecorder(tmp_path, name="seed{seed}", seeds=block, allow_existing=True) as rec:
+            rollout(cfg, make_pair_policy("zero", cfg), block, on_step=rec)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f"seed{s}.pfrec" for s in (0, 1, 2)]
+    again = CoreRecorder(tmp_path, name="seed{seed}", seeds=[2], allow_existing=True)
+    with pytest.raises(FileExistsError, match=r"seed2\.pfrec"), again:
+        rollout(cfg, make_pair_policy("zero", cfg), [2], on_step=again)
