@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 import baselines
+from pairflock_env import parallel_env
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text()
@@ -42,8 +43,6 @@ def test_python_quick_start_runs(capsys):
 
 
 def test_the_readme_controller_registers_by_name_and_holds_the_pair():
-    from pairflock_env import parallel_env
-
     (code,) = _blocks("python", _section("Add a controller"))
     before = set(baselines.POLICIES)
     try:

@@ -13,7 +13,7 @@ from view_helpers import VIEWS, make_view, reset_view, step_view, zero_action
 
 from baselines.controllers import make_pair_policy
 from baselines.experiments.benchmark.cli import build_parser, resolve
-from baselines.reporting.safety_figure import closest_pass_figure, read_rows
+from baselines.experiments.safety.figure import closest_pass_figure, read_rows
 from pairflock_env import AGENT_INFO_KEYS, PairFlockConfig, PairFlockCore, make_config
 from pairflock_env.config.sections.safety import (
     BOUND_OTHER_SHARE as QUAD_OTHER_SHARE,

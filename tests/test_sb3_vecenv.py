@@ -16,8 +16,8 @@ from view_helpers import snapshot
 
 import pairflock_env
 from baselines import make_pair_policy
+from baselines.controllers.sb3 import METADATA_KEY
 from baselines.evaluation.rollout import rollout, trace_metrics
-from baselines.sb3_policy import METADATA_KEY
 from pairflock_env import ENV_ID, make_config, parallel_env
 from pairflock_env.envs import PairFlockSB3VecEnv, sb3
 

@@ -110,6 +110,15 @@ def _record_safety(tr: Trace, info, live: np.ndarray) -> None:
     )
 
 
+def _record_step(tr: Trace, core: PairFlockCore, k: int, res, live, filtered: bool) -> None:
+    """What step ``k`` adds to the trace of the swarms still running (``live``)."""
+    tr.u[live, :, k - 1] = core.pair_command[live]  # the applied (filtered) command
+    if filtered:
+        _record_safety(tr, res.info, live)
+    tr.clipped_steps[live] += res.info["action_clipped"][live]
+    _record(tr, core, k, res, live)
+
+
 def _freeze_finished(tr: Trace, T: int) -> None:
     """Hold the series of swarms that ended early at their last value."""
     for b in np.flatnonzero(tr.ended < T):
@@ -183,11 +192,7 @@ def rollout(
         actions = np.asarray(actions, dtype=np.float64).reshape(B, M, D)
         res = core.step(actions)
         live = ~done
-        tr.u[live, :, k - 1] = core.pair_command[live]  # the applied (filtered) command
-        if filtered:
-            _record_safety(tr, res.info, live)
-        tr.clipped_steps[live] += res.info["action_clipped"][live]
-        _record(tr, core, k, res, live)
+        _record_step(tr, core, k, res, live, filtered)
         if on_step is not None:
             on_step(k, core, res, live)
         ended_now = live & (res.terminated | res.truncated)

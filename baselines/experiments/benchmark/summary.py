@@ -8,7 +8,7 @@ from typing import Any
 
 from baselines.reporting import tables
 from baselines.reporting.criteria import Check, criteria_table
-from baselines.reporting.safety_table import has_safety_columns, safety_table
+from baselines.reporting.tables import has_safety_columns, safety_table
 from pairflock_env.task.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
 
 __all__ = ["summary_markdown"]
