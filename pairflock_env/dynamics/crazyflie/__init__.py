@@ -20,11 +20,11 @@ Importing this package registers the vehicle in :data:`~pairflock_env.dynamics.V
 from __future__ import annotations
 
 from pairflock_env.config.registry import VEHICLES
-from pairflock_env.dynamics import Vehicle  # defined before pairflock_env.dynamics imports us
 from pairflock_env.dynamics.crazyflie import section
 from pairflock_env.dynamics.crazyflie.data import CRAZYFLIE_MODELS
 from pairflock_env.dynamics.crazyflie.model import CMD_FIELDS, CrazyflieModel, quat_xyzw
 from pairflock_env.dynamics.crazyflie.params import CrazyflieParams
+from pairflock_env.dynamics.vehicle import Vehicle
 
 __all__ = [
     "CMD_FIELDS",
