@@ -23,6 +23,7 @@ EXPECTED = {
     "pairflock-evaluate": "train.evaluate.__main__:main",
     "pairflock-sweep": "train.sweep.__main__:main",
     "pairflock-imitate": "train.imitate.__main__:main",
+    "pairflock-replay": "pairflock_env.replay.cli:main",
 }
 
 
