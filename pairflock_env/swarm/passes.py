@@ -82,7 +82,8 @@ class NeighborPass:
         (distance to the nearest non-partner UAV, m; with no other UAV, n_uavs = 2, the
         largest finite separation :func:`~pairflock_env.task.spaces.separation_bound`, so
         infos stay finite) and ``shared_neighbors`` (eq. 28). The observation's neighbour
-        slots are in :attr:`pair_out`.
+        slots are in :attr:`pair_out`. The flocking outputs gain ``swarm_min_separation``
+        (B,): the smallest distance between any two UAVs, partners included (m).
         """
         cfg, g = self.cfg, self.grid
         ia, ip = self.agent_uavs, self.partner_uavs
@@ -99,4 +100,9 @@ class NeighborPass:
         if cfg.n_uavs == 2:  # no non-partner UAV at all: the largest finite separation
             sep[:] = separation_bound(cfg)
         pair["shared_neighbors"] = pp["shared"][:, self.agent_pair]
+        # the closest two UAVs: min_d2 leaves each UAV's partner out, the pair distance adds it
+        closest = np.sqrt(fl["min_d2"].min(axis=1))
+        if len(ia):
+            np.minimum(closest, pair["pair_distance"].min(axis=1), out=closest)
+        fl["swarm_min_separation"] = closest
         return fl, pair
