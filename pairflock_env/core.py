@@ -7,7 +7,9 @@ One control step (:meth:`PairFlockCore.step`), stage by stage:
 2. decode: clip to [-1, 1], scale by ``pair_accel_limit`` to m/s^2, giving the pair command
    u = f^x of every paired UAV (:meth:`PairFlockCore.decode_actions`); with
    ``safety_filter="cbf"`` each paired UAV then filters its u from what it senses
-   (:class:`~pairflock_env.safety.stage.SafetyStage`, docs/safety.md);
+   (:class:`~pairflock_env.safety.stage.CBFStage`, docs/safety.md), or, with
+   ``safety_scope="swarm"``, every UAV filters its whole command f (+ u)
+   (:class:`~pairflock_env.safety.stage.SwarmStage`, docs/swarm-safety.md);
 3. a_des = flocking command of the current state (eqs. 11-19) + u on the paired UAVs
    (+ the random disturbance, when configured);
 4. the vehicle model integrates ``substeps`` physics steps with a_des held;
@@ -321,9 +323,15 @@ class PairFlockCore:
 
     def _desired_acceleration(self, u: np.ndarray) -> np.ndarray:
         """a_des (B, N, dim): the flocking command of the current state, plus the pair
-        command u on the paired UAVs, plus the random disturbance (when configured)."""
-        a_des = self._flock_out["acc"].copy()
-        a_des[:, self.agent_uavs] += u
+        command u on the paired UAVs (or the safety stage's filtered whole command, when it
+        filters every UAV's: ``safety_scope="swarm"``), plus the random disturbance (when
+        configured)."""
+        whole = getattr(self.safety, "whole_command", None)
+        if whole is not None:
+            a_des = whole.copy()
+        else:
+            a_des = self._flock_out["acc"].copy()
+            a_des[:, self.agent_uavs] += u
         if self.config.disturbance_std > 0:
             a_des += self.config.disturbance_std * self._draw_normal(a_des.shape[1:])
         return a_des

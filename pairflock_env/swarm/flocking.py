@@ -35,6 +35,7 @@ from collections import namedtuple
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig
+from pairflock_env.config.sections.flocking import repulsion_floor
 from pairflock_env.kernels import KernelParams, jit_inline, jit_kernel
 from pairflock_env.swarm.grid import (
     GridArrays,
@@ -62,6 +63,8 @@ FLOCKING = KernelParams(
         "pin_velocity_gain",
         "collision_distance2",
         "divergence_limit",
+        "floor_radius2",
+        "floor_gain",
     ),
 )
 FlockScalars = namedtuple("FlockScalars", FLOCKING.names)
@@ -70,7 +73,9 @@ _F = FLOCKING.index
 
 
 def flocking_params(cfg: PairFlockConfig) -> np.ndarray:
-    """The flocking pass's parameter vector (:data:`FLOCKING`) of a config."""
+    """The flocking pass's parameter vector (:data:`FLOCKING`) of a config (the repulsion
+    floor: :func:`~pairflock_env.config.sections.flocking.repulsion_floor`)."""
+    floor_radius2, floor_gain = repulsion_floor(cfg)
     return FLOCKING.pack(
         attraction=cfg.attraction,
         repulsion=cfg.repulsion,
@@ -81,6 +86,8 @@ def flocking_params(cfg: PairFlockConfig) -> np.ndarray:
         pin_velocity_gain=cfg.pin_velocity_gain,
         collision_distance2=cfg.collision_distance**2,
         divergence_limit=cfg.divergence_limit,
+        floor_radius2=floor_radius2,
+        floor_gain=floor_gain,
     )
 
 
@@ -96,6 +103,8 @@ def _scalars(v):
         v[_F.pin_velocity_gain],
         v[_F.collision_distance2],
         v[_F.divergence_limit],
+        v[_F.floor_radius2],
+        v[_F.floor_gain],
     )
 
 
@@ -186,8 +195,12 @@ def _largest_component(parent, size):
 
 @jit_inline
 def _pair_force(q, p, prm, b, i, j, d2, acc):
-    """Eqs. 13-18 for the neighbours i < j: symmetric, so f_ij = -f_ji."""
+    """Eqs. 13-18 for the neighbours i < j: symmetric, so f_ij = -f_ji. With the swarm
+    layer's floor (floor_radius2 > 0) the repulsion closer than rho* is at least
+    F* rho* / rho (w multiplies q_j - q_i, of length rho)."""
     w = prm.attraction - prm.repulsion * np.exp(-d2 * prm.inv_sigma2)
+    if d2 < prm.floor_radius2 and d2 > 0.0:
+        w = min(w, -prm.floor_gain / d2)
     for k in range(q.shape[2]):
         f = w * (q[b, j, k] - q[b, i, k]) + prm.consensus * (p[b, j, k] - p[b, i, k])
         acc[b, i, k] += f
