@@ -96,7 +96,7 @@ def states(N: int, B: int, limit: float, params: dict):
 def assumptions(N: int, seeds: int = 8, radius: float = 20.0, steps: int | None = None) -> None:
     """Percentiles of the quantities behind the filter's assumptions (module docstring),
     for the UAVs within ``radius`` of a paired UAV (20 m: the filter's sensing radius when
-    docs/safety.md quoted them; the default is 100 m now), over the first ``steps`` control
+    docs/safety-results.md quoted them; the default is 100 m now), over the first ``steps`` control
     steps (default: half an episode, 25 s)."""
     cfg = make_config("paper", n_uavs=N)
     core = PairFlockCore(cfg, num_swarms=seeds)

@@ -72,7 +72,7 @@ def test_unset_filter_parameters_follow_the_vehicle():
     assert p.brake_accel == L and p.other_accel == pytest.approx(QUAD_OTHER_SHARE * L)
     assert p.reaction_time == pytest.approx(QUAD_REACTION_CYCLES / q.quad_attitude_freq)
     assert p.decay == VEHICLES["quadrotor"].safety_decay
-    # what docs/safety.md measured on the quadrotor, to the last bit
+    # what docs/safety-results.md measured on the quadrotor, to the last bit
     assert (p.brake_accel, p.other_accel, p.reaction_time, p.decay) == (6.0, 2.0, 0.1, 0.1)
     # the attitude loop sets tau: a slower loop (with the physics step it needs) waits longer
     slow = SafetyParams.from_config(q.replace(quad_attitude_freq=7.5))

@@ -4,7 +4,7 @@
   baselines.reproduce --check``; docs/benchmark.md);
 * :data:`LEARNED` - the trained pair policy (``python -m train.evaluate --check``, and the
   score training keeps its best model by; docs/learning.md);
-* :data:`GENERALIST` - the safe generalist pair policy of docs/safety.md, on every evaluated
+* :data:`GENERALIST` - the safe generalist pair policy of docs/safety-results.md, on every evaluated
   (N, start) (``python -m train.evaluate --targets generalist --check``; ``eval_targets:
   generalist`` in a run config selects the best model by them).
 
@@ -73,7 +73,7 @@ class LearnedTargets:
 
 PAPER = PaperCriteria()
 LEARNED = LearnedTargets()
-#: the safe generalist (docs/safety.md): every N in 20-100, both starts, filter on
+#: the safe generalist (docs/safety-results.md): every N in 20-100, both starts, filter on
 GENERALIST = LearnedTargets(
     median_error=0.01,
     max_error=0.05,

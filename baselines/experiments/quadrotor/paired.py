@@ -3,7 +3,7 @@ pairs with an exact McNemar test, and the paired change of each criterion's metr
 
 The Sec. VI-B criteria must hold on every seed of a set, so one run in 50 decides a set; this
 module counts runs instead, on the seeds both runs share (``python -m
-baselines.quadrotor_compare``, docs/safety.md "Per run rather than per set").
+baselines.quadrotor_compare``, docs/safety-results.md "Per run rather than per set").
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ smaller than before. This module pairs the runs and reports, per controller and 
 for each metric, the change of the median and of the worst run, the change of the 90th
 percentile and the median of the per-run ratio on/off (each with a seeded bootstrap 95 % CI
 over the runs), and how many runs got more than 10 % worse, more than 10 % better, or stayed
-identical (``python -m baselines.safety_compare``, docs/safety.md "Run by run").
+identical (``python -m baselines.safety_compare``, docs/safety-results.md "Run by run").
 """
 
 from __future__ import annotations

@@ -39,7 +39,7 @@ OTHER_SHARE = 0.4
 DECAY = 0.5
 #: default sensing radius R_s (m): the smallest of 20-120 m with which no filtered tuning run
 #: (seeds 2000-2019: the safe generalist at pair_accel_limit 50, sliding mode, the
-#: proportional method and the generalist at 1000) had an infeasible step (docs/safety.md)
+#: proportional method and the generalist at 1000) had an infeasible step (docs/safety-results.md)
 SENSING_RADIUS = 100.0
 #: what the filter covers: the paired UAVs' pair commands, or every UAV's whole command
 SCOPES = ("pairs", "swarm")
@@ -52,7 +52,7 @@ SWARM_ACCEL_LIMIT = 20.0
 # quadrotor's attitude loop), sets the unset parameters from its own physics
 # (pairflock_env.dynamics.Vehicle: accel_bound, reaction_time, safety_decay). For the
 # quadrotor they reproduce the setting selected on the tuning seeds 60000-60099 of the
-# paper-quadrotor scenario (alpha 6, A_o 2, tau 0.1 s, lambda 0.1; docs/safety.md).
+# paper-quadrotor scenario (alpha 6, A_o 2, tau 0.1 s, lambda 0.1; docs/safety-results.md).
 #: with a vehicle bound, A_o is at most this share of it (alpha at most all of it)
 BOUND_OTHER_SHARE = 1.0 / 3.0
 

@@ -31,7 +31,7 @@ _FREQ = Real(1e-2, 1e4)
 
 #: the safety filter counts on braking only after this many attitude-loop time constants
 #: (1 / quad_attitude_freq): 0.1 s at the default 15 rad/s, the only frequency it was
-#: measured at (docs/safety.md "Quadrotors")
+#: measured at (docs/safety-results.md "Quadrotors")
 REACTION_CYCLES = 1.5
 
 
