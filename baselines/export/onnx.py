@@ -79,7 +79,7 @@ def _layers(g: _Graph, net: PolicyNetwork) -> str:
 
 
 def _output(g: _Graph, net: PolicyNetwork, x: str) -> None:
-    low, high = g.const("action_low", net.low), g.const("action_high", net.high)
+    low = g.const("action_low", net.low)
     if net.output == "unscale":  # SB3: low + (0.5 * (a + 1.0) * (high - low))
         one, half = g.const("one", 1.0), g.const("half", 0.5)
         span = g.const("action_span", net.high - net.low)
@@ -89,7 +89,7 @@ def _output(g: _Graph, net: PolicyNetwork, x: str) -> None:
         g.node("Add", [low, x], OUTPUT)
     else:  # np.clip(a, low, high)
         x = g.node("Max", [x, low], "above_low")
-        g.node("Min", [x, high], OUTPUT)
+        g.node("Min", [x, g.const("action_high", net.high)], OUTPUT)
 
 
 def onnx_model(net: PolicyNetwork, metadata: Mapping[str, str] | None = None):
