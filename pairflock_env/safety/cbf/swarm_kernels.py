@@ -149,7 +149,7 @@ def _own_speed(p, b, i, cbar):
     return np.sqrt(s2)
 
 
-@jit_kernel
+@jit_inline
 def _candidates(q, b, pt, r2, exclude, use_grid, g, hits):
     """The UAVs of swarm b closer than sqrt(r2) to ``pt`` (``exclude`` left out) into
     ``hits``, in increasing index, from the grid or a scan of all N; returns their count."""
@@ -208,7 +208,7 @@ def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, use_grid, g, hi
                 cnt[i] = cstart[i]
 
 
-@jit_kernel
+@jit_inline
 def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, use_grid, g, hits, vec, spd, G, rhs):
     """UAV i's rows into G, rhs: the unpaired UAVs within its shortened radius, then the
     paired ones (every agent, for a paired i; its contact list, for an unpaired one).
@@ -255,7 +255,7 @@ def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, use_grid, g, hits, vec, spd
     return K, hmin, True
 
 
-@jit_kernel
+@jit_inline
 def _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver):
     """x for UAV i (x_nom = a_nom - c_i) into vec[_XOUT]; returns (violated, status)."""
     W, idx, Gw, bw, ws, marg = solver
