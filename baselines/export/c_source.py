@@ -37,19 +37,40 @@ SOURCE = "pairflock_policy.c"
 _ACT = {"identity": 0, "tanh": 1, "relu": 2, "hardtanh": 3}
 
 _DENSE = r"""
-/* y = act(W x + b), W row-major (n_out, n_in) */
+static float pf_act(float s, int act, float lo, float hi)
+{
+    if (act == 1) return tanhf(s);
+    if (act == 2) return s > 0.0f ? s : 0.0f;
+    if (act == 3) return s < lo ? lo : (s > hi ? hi : s);
+    return s;
+}
+
+/* y = act(W x + b), W row-major (n_out, n_in); four rows at a time (independent sums, each
+   in the order b + w_0 x_0 + w_1 x_1 + ..., so the result does not depend on the blocking) */
 static void pf_dense(const float *W, const float *b, int n_out, int n_in, const float *x,
                      float *y, int act, float lo, float hi)
 {
-    int i, j;
-    for (i = 0; i < n_out; ++i) {
+    int i = 0, j;
+    for (; i + 4 <= n_out; i += 4) {
+        const float *w0 = W + (long)i * n_in, *w1 = w0 + n_in, *w2 = w1 + n_in, *w3 = w2 + n_in;
+        float s0 = b[i], s1 = b[i + 1], s2 = b[i + 2], s3 = b[i + 3];
+        for (j = 0; j < n_in; ++j) {
+            float xj = x[j];
+            s0 += w0[j] * xj;
+            s1 += w1[j] * xj;
+            s2 += w2[j] * xj;
+            s3 += w3[j] * xj;
+        }
+        y[i] = pf_act(s0, act, lo, hi);
+        y[i + 1] = pf_act(s1, act, lo, hi);
+        y[i + 2] = pf_act(s2, act, lo, hi);
+        y[i + 3] = pf_act(s3, act, lo, hi);
+    }
+    for (; i < n_out; ++i) {
         const float *w = W + (long)i * n_in;
         float s = b[i];
         for (j = 0; j < n_in; ++j) s += w[j] * x[j];
-        if (act == 1) s = tanhf(s);
-        else if (act == 2) s = s > 0.0f ? s : 0.0f;
-        else if (act == 3) s = s < lo ? lo : (s > hi ? hi : s);
-        y[i] = s;
+        y[i] = pf_act(s, act, lo, hi);
     }
 }
 """

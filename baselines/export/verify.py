@@ -4,7 +4,8 @@ compiled C's outputs on them, the C object's size and its time per call.
 The C is checked through a small harness program (:data:`HARNESS`, written next to the
 export in a build folder) that reads float32 rows from a file, runs one of the exported
 functions on each and writes the outputs; asked for repeats it also times the calls
-(``clock_gettime``, the median pass). The object's flash size is the size of its ``.text``
+(``clock_gettime`` of the process's CPU time, steadier than the wall clock on a shared
+machine; the median pass). The object's flash size is the size of its ``.text``
 and ``.rodata`` sections, read from the ELF object the compiler writes.
 """
 
@@ -30,6 +31,7 @@ __all__ = [
     "C_FLAGS",
     "HARNESS",
     "compile_harness",
+    "elf_sections",
     "find_cc",
     "flash_size",
     "object_sections",
@@ -84,9 +86,9 @@ int main(int argc, char **argv)
     run(mode, in, out, n, k_in, k_out);
     for (i = 0; i < reps; ++i) {
         struct timespec a, b;
-        clock_gettime(CLOCK_MONOTONIC, &a);
+        clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &a);
         run(mode, in, out, n, k_in, k_out);
-        clock_gettime(CLOCK_MONOTONIC, &b);
+        clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &b);
         ns[i] = ((b.tv_sec - a.tv_sec) * 1e9 + (b.tv_nsec - a.tv_nsec)) / n;
     }
     if (reps > 0) {
@@ -147,10 +149,10 @@ def object_sections(export_dir: str | Path, build_dir: str | Path, cc: str, opt:
     Path(build_dir).mkdir(parents=True, exist_ok=True)
     src = str(Path(export_dir) / "pairflock_policy.c")
     _compile(cc, [*C_FLAGS, opt, "-c", src, "-o", str(obj)], "pairflock_policy.c")
-    return _elf_sections(obj.read_bytes())
+    return elf_sections(obj.read_bytes())
 
 
-def _elf_sections(data: bytes) -> dict[str, int]:
+def elf_sections(data: bytes) -> dict[str, int]:
     """{name: size} of the sections of a 64- or 32-bit little-endian ELF object."""
     if data[:4] != b"\x7fELF" or data[5] != 1:
         raise ValueError("not a little-endian ELF object: read its size with `size` instead")
