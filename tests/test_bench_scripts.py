@@ -15,6 +15,7 @@ QUICK = {
     "bench_crazyflie": ["--quick", "--sizes", "4"],
     "bench_recording": ["--quick"],
     "bench_replay": ["--quick"],  # without a browser (playwright) it says so and stops
+    "bench_export": ["--quick"],
 }
 
 

@@ -23,7 +23,8 @@ EXPECTED = {
     "pairflock-evaluate": "train.evaluate.__main__:main",
     "pairflock-sweep": "train.sweep.__main__:main",
     "pairflock-imitate": "train.imitate.__main__:main",
-    "pairflock-replay": "pairflock_env.replay.cli:main",
+    "pairflock-replay": "pairflock_env.replay.__main__:main",
+    "pairflock-export": "baselines.export.__main__:main",
 }
 
 

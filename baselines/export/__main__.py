@@ -1,7 +1,19 @@
-"""``python -m baselines.export sb3:<model> --out DIR`` (the same as ``pairflock-export``)."""
+"""``python -m baselines.export sb3:<model> --out DIR`` / ``pairflock-export``: the exporter
+(:mod:`baselines.export.cli`), on one thread per process."""
 
 import sys
+from collections.abc import Sequence
 
-from baselines.export.cli import main
+from baselines.runtime.threads import pin_threads
 
-sys.exit(main())
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Pin the threads, then run the command; returns the exit status."""
+    pin_threads()  # before numpy loads
+    from baselines.export.cli import main as run
+
+    return run(argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

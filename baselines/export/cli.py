@@ -7,37 +7,29 @@ N observations and compares onnxruntime and the compiled C with stable-baselines
 a model of another algorithm, an existing folder without ``--force``, a missing extra) ends
 with one line on stderr, ``pairflock-export: error: ...``, and exit status 2.
 
-This module imports only the standard library at its top; the exporter itself
-(:mod:`baselines.export.build`: stable-baselines3, torch, onnx) is imported when a command
-runs, so that a missing extra is reported on that one line too.
+The exporter itself (:mod:`baselines.export.build`: stable-baselines3, torch, onnx) loads
+through :func:`baselines.runtime.optional.load` when the command runs, so that a missing extra
+is reported on that one line too; the errors take the project's one command-line error path
+(:mod:`baselines.runtime.cli`).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
-import sys
 from collections.abc import Sequence
-from typing import Any, NoReturn
+from typing import Any
+
+from baselines.runtime import optional
+from baselines.runtime.cli import ArgumentParser, user_errors
 
 __all__ = ["PROG", "build_parser", "main"]
 
 PROG = "pairflock-export"
-#: what bad input raises (a programming error raises something else and keeps its traceback)
-USER_ERRORS = (ValueError, TypeError, FileNotFoundError, FileExistsError, ModuleNotFoundError)
-#: the packages the exporter imports, and the extra of pairflock-env that installs each
-EXTRAS = {"stable_baselines3": "train", "torch": "train", "onnx": "export"}
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse with the project's error: one line ``prog: error: message``, status 2."""
-
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message}\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(
+    p = ArgumentParser(
         prog=PROG,
         description="Export a trained pair policy for a flight controller: policy.onnx (the "
         "network), pairflock_policy.h/.c (observation -> action in C99, float32, no heap) and "
@@ -55,16 +47,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _exporter() -> Any:
-    """:mod:`baselines.export.build`, or ``ModuleNotFoundError`` naming the extra."""
-    try:
-        return importlib.import_module("baselines.export.build")
-    except ModuleNotFoundError as e:
-        top = (e.name or "").partition(".")[0]
-        if top not in EXTRAS:
-            raise
-        raise ModuleNotFoundError(
-            f"{PROG} needs {top}: pip install 'pairflock-env[{EXTRAS[top]}]'", name=e.name
-        ) from None
+    """:mod:`baselines.export.build`, or ``ModuleNotFoundError`` naming the extra to install."""
+    for package in ("stable_baselines3", "torch", "onnx"):
+        optional.load(package, PROG)
+    return importlib.import_module("baselines.export.build")
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -91,12 +77,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     """The command line; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
+    with user_errors(parser, ModuleNotFoundError):
         return _run(args)
-    except USER_ERRORS as e:
-        parser.error(" ".join(str(e).split()))  # one line, whatever the message holds
-    return 2  # pragma: no cover
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    return 2  # pragma: no cover (user_errors exits)

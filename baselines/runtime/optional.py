@@ -26,6 +26,8 @@ EXTRAS = {
     "rliable": "sweep",
     "scipy": "sweep",
     "optuna": "sweep",
+    "onnx": "export",
+    "onnxruntime": "export",
 }
 
 
