@@ -5,7 +5,10 @@ and the infos in every view."""
 
 from __future__ import annotations
 
+import csv
 import hashlib
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -13,6 +16,7 @@ from test_safety_filter import ref_margin, ref_qcqp
 from view_helpers import VIEWS, make_view, reset_view, step_view, zero_action
 
 from baselines.controllers import make_pair_policy
+from baselines.experiments.safety.nearest import LAYERS, nearest_figure, nearest_series
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.config.sections.flocking import repulsion_floor, repulsion_peak
 from pairflock_env.safety import SafetyParams, SwarmFilter
@@ -20,6 +24,12 @@ from pairflock_env.safety.cbf.kernels import _sigma_min
 from pairflock_env.swarm.flocking import FLOCKING, flocking_params
 from pairflock_env.swarm.grid import NeighborGrid
 from pairflock_env.task.infos import SAFETY_SWARM_INFO_KEYS
+from pairflock_env.task.metrics import (
+    FLOCK_METRIC_DOCS,
+    SWARM_SAFETY_METRIC_DOCS,
+    flock_state,
+    swarm_safety_metrics,
+)
 
 SWARM = dict(safety_filter="cbf", safety_scope="swarm")
 
@@ -322,3 +332,57 @@ def test_swarm_min_separation_is_the_closest_two_uavs_partners_included():
         res = core.reset(seed=0, options=dict(positions=q, velocities=np.zeros((4, 2))))
         assert res.info["swarm_min_separation"][0] == 0.5
         assert res.info["min_separation"][0].min() == 4.5  # the partner left out there
+
+
+# ------------------------------------------------------------------- metrics and commands
+def test_flock_state_on_the_grid_and_by_all_pairs():
+    rng = np.random.default_rng(2)
+    q = rng.uniform(0, 60, (2, 300, 2))
+    unpaired = np.ones(300, bool)
+    unpaired[:4] = False
+    grid = NeighborGrid(2, 300, 2, cell_size=8.4).build(q)
+    lq = np.array([30.0, 20.0])
+    for b in range(2):
+        rg, track, dev = flock_state(q, b, lq, unpaired, 8.4, 7.0)
+        assert flock_state(q, b, lq, unpaired, 8.4, 7.0, grid) == pytest.approx((rg, track, dev))
+        x = q[b, unpaired]
+        assert rg == pytest.approx(np.sqrt(((x - x.mean(0)) ** 2).sum(1).mean()))
+        assert track == pytest.approx(np.linalg.norm(x.mean(0) - lq))
+        d = np.linalg.norm(q[b, :, None] - q[b, None], axis=-1)[np.triu_indices(300, 1)]
+        d = d[d < 8.4]
+        assert dev == pytest.approx(((d - 7.0) ** 2).sum() / (d.size + 1))
+
+
+def test_swarm_safety_metrics_count_steps_and_uav_steps():
+    m = swarm_safety_metrics(np.array([3.0, 0.9, 1.2, 0.95]), [0, 4, 2], [0, 2, 0], 1.0)
+    assert m == {
+        "swarm_closest": 0.9,
+        "swarm_steps_below": 2,
+        "swarm_active_uav_steps": 6,
+        "swarm_infeasible_uav_steps": 2,
+        "swarm_infeasible_steps": 1,
+    }
+
+
+def test_the_swarm_safety_suite_reports_every_uav_and_the_flock(tmp_path):
+    out = tmp_path / "ss"
+    cmd = [sys.executable, "-m", "baselines.benchmark", "--suite", "swarm-safety", "--seeds", "1"]
+    cmd += ["--n-uavs", "20", "--set", "init=corners", "-p", "smc", "--horizon", "12"]
+    cmd += ["--workers", "2", "--no-figures", "--quiet", "--out", str(out)]
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert [r["scenario"] for r in rows] == ["off", "pairs", "swarm"]
+    assert all(r["seed"] == "71000" for r in rows)  # the held-out seeds
+    for r in rows:
+        assert set(SWARM_SAFETY_METRIC_DOCS) | set(FLOCK_METRIC_DOCS) <= set(r)
+    assert float(rows[2]["swarm_closest"]) >= 1.0 and rows[2]["swarm_steps_below"] == "0"
+    assert "## Every UAV and the flock" in (out / "summary.md").read_text()
+    assert "closest two UAVs min (m)" in done.stdout
+
+
+def test_the_nearest_neighbour_figure(tmp_path):
+    series = [nearest_series(30, layer, 71000, every=1.0, horizon=5.0) for layer in LAYERS]
+    assert [len(s["t"]) for s in series] == [6, 6]
+    assert all(s["min"][k] <= s["p1"][k] <= s["p50"][k] for s in series for k in range(6))
+    assert nearest_figure(series, tmp_path / "nn.png").stat().st_size > 0

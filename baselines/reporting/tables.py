@@ -24,12 +24,14 @@ __all__ = [
     "SAFETY_METRICS",
     "SCENARIO_KEYS",
     "has_safety_columns",
+    "has_swarm_columns",
     "md_escape",
     "pivot_table",
     "safety_table",
     "stat_cell",
     "summarize",
     "summary_table",
+    "swarm_table",
 ]
 
 Row = Mapping[str, Any]
@@ -228,9 +230,10 @@ def has_safety_columns(rows: Sequence[Row]) -> bool:
     return bool(rows) and all("closest_pass" in r for r in rows)
 
 
-def safety_table(rows: Sequence[Row], keys: Keys) -> str:
+def safety_table(rows: Sequence[Row], keys: Keys, metrics: Sequence[Metric] | None = None) -> str:
     """Markdown: one line per (policy, scenario), policies in order of appearance and their
-    scenarios in order; leading columns the policy and ``keys`` (header, row key)."""
+    scenarios in order; leading columns the policy and ``keys`` (header, row key); columns
+    ``metrics`` (default :data:`SAFETY_METRICS`)."""
     pols: dict[str, int] = {}
     scen: dict[str, int] = {}
     for r in rows:
@@ -239,8 +242,42 @@ def safety_table(rows: Sequence[Row], keys: Keys) -> str:
     lead = [("policy", "policy"), *((h, lambda r, k=k: r.get(k, r["scenario"])) for h, k in keys)]
     return summary_table(
         rows,
-        SAFETY_METRICS,
+        SAFETY_METRICS if metrics is None else metrics,
         lead=lead,
         group=lambda r: (r["policy"], r["scenario"]),
         sort=lambda g: (pols[g[0]], scen[g[1]]),
     )
+
+
+# --------------------------------------------------------------------------- every UAV
+def _none_below(values: list[Any], rows: list[Row]) -> str:
+    return f"{int(np.sum(np.asarray(values) == 0))}/{len(values)}"
+
+
+def _smallest_int(values: list[Any], rows: list[Row]) -> str:
+    return f"{int(np.min(values))}" if values else "-"
+
+
+#: (metric, header, cell) of the whole swarm's table (one row per run: swarm metrics)
+SWARM_METRICS = (
+    ("swarm_closest", "closest two UAVs min (m)", lambda v, r: f"{np.min(v):.3f}"),
+    ("swarm_steps_below", "runs never below D_s", _none_below),
+    ("swarm_infeasible_uav_steps", "infeasible UAV-steps", _total_and_runs),
+    ("swarm_active_uav_steps", "active UAV-steps median", _median("{:.0f}")),
+    ("flock_gyration", "Rg median (m)", _median("{:.2f}")),
+    ("flock_velocity_mismatch", "vel. mismatch median (m/s)", _median("{:.4f}")),
+    ("flock_tracking", "tracking median (m)", _median("{:.3f}")),
+    ("flock_lattice_deviation", "lattice dev. median (m^2)", _median("{:.3g}")),
+    ("flock_min_component", "largest component min", _smallest_int),
+)
+
+
+def has_swarm_columns(rows: Sequence[Row]) -> bool:
+    """Whether the runs carry the whole swarm's separation and flock metrics."""
+    return bool(rows) and all("swarm_closest" in r for r in rows)
+
+
+def swarm_table(rows: Sequence[Row], keys: Keys) -> str:
+    """Markdown: :data:`SWARM_METRICS` per (policy, scenario), over runs (one row per swarm:
+    the pair-0 rows, since a swarm's metrics repeat on each of its pairs' rows)."""
+    return safety_table([r for r in rows if r["pair"] == 0], keys, SWARM_METRICS)

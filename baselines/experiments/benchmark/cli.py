@@ -340,12 +340,15 @@ def _video_target(args, specs, scenarios, parser) -> tuple[int, int] | None:
 
 def _metric_kwargs(args: argparse.Namespace, configs) -> dict[str, Any]:
     """Options of the episode metrics: the steady window, and the safety columns in every
-    run as soon as one scenario has the safety filter on (so that off and on compare)."""
+    run as soon as one scenario has the safety filter on (so that off and on compare), the
+    whole swarm's columns as soon as one has ``safety_scope="swarm"``."""
     kw: dict[str, Any] = {}
     if args.steady_window is not None:
         kw["steady_window"] = args.steady_window
     if any(c.safety_filter != "none" for c in configs):
         kw["safety_metrics"] = True
+    if any(c.safety_scope == "swarm" for c in configs):
+        kw["swarm_metrics"] = True
     return kw
 
 

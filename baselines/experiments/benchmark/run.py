@@ -21,8 +21,10 @@ from baselines.reporting.criteria import all_passed, check_paper_claims, criteri
 from baselines.reporting.tables import (
     ACCURACY_METRICS,
     has_safety_columns,
+    has_swarm_columns,
     safety_table,
     summary_table,
+    swarm_table,
 )
 from baselines.reporting.video import write_episode_video
 from baselines.runtime.files import (
@@ -34,7 +36,12 @@ from baselines.runtime.files import (
 )
 from baselines.runtime.folders import INCOMPLETE_MARKER, result_folder
 from baselines.runtime.record import run_record
-from pairflock_env.task.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
+from pairflock_env.task.metrics import (
+    FLOCK_METRIC_DOCS,
+    METRIC_DOCS,
+    SAFETY_METRIC_DOCS,
+    SWARM_SAFETY_METRIC_DOCS,
+)
 
 __all__ = ["Results", "main", "replot", "simulate"]
 
@@ -143,6 +150,11 @@ def _write_results(out: Path, plan: Plan, res: Results, sc_records, pol_records)
             for k, v in {
                 **METRIC_DOCS,
                 **(SAFETY_METRIC_DOCS if has_safety_columns(res.rows) else {}),
+                **(
+                    {**SWARM_SAFETY_METRIC_DOCS, **FLOCK_METRIC_DOCS}
+                    if has_swarm_columns(res.rows)
+                    else {}
+                ),
             }.items()
         },
         "snapshots": plan.snapshots,
@@ -281,6 +293,8 @@ def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
     print(summary_table(res.rows, ACCURACY_METRICS, plan.keys))
     if has_safety_columns(res.rows):
         print("\n" + safety_table(res.rows, plan.keys))
+    if has_swarm_columns(res.rows):
+        print("\n" + swarm_table(res.rows, plan.keys))
     for line in criteria_lines(checks):
         print(line)
     print(
