@@ -379,6 +379,13 @@ def test_the_swarm_safety_suite_reports_every_uav_and_the_flock(tmp_path):
     assert float(rows[2]["swarm_closest"]) >= 1.0 and rows[2]["swarm_steps_below"] == "0"
     assert "## Every UAV and the flock" in (out / "summary.md").read_text()
     assert "closest two UAVs min (m)" in done.stdout
+    report = subprocess.run(
+        [sys.executable, "-m", "baselines.experiments.safety.swarm_report", str(out)],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    assert "| 20 | corners | smc | swarm | 1 |" in report and "swarm/pairs" in report
 
 
 def test_the_nearest_neighbour_figure(tmp_path):
