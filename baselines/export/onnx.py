@@ -2,7 +2,7 @@
 
 The graph is written from the :class:`~baselines.export.network.PolicyNetwork` (the same
 arrays the C source holds) rather than traced through ``torch.onnx.export``: the layers are
-few and known, the classic tracer is deprecated in current torch and the dynamo exporter needs
+few and known, the classic tracer is on its way out of current torch and the dynamo exporter needs
 ``onnxscript``; building the graph needs only ``onnx``. Input ``features`` (batch,
 input_size) float32, the encoded observation; output ``action`` (batch, action_size)
 float32, what SB3's ``predict(features, deterministic=True)`` returns. Each dense layer is a
