@@ -11,9 +11,9 @@ Each RUN_DIR is a finished benchmark folder whose runs carry the whole swarm's c
 
 * separation: per (N, start, policy, layer), the closest two UAVs over every run, the runs
   with a step below safety_distance, infeasible UAV-steps (runs with any), active UAV-steps;
-* flock: per (N, start, policy), the median over seeds of swarm / off for the flock's
-  quality (radius of gyration, velocity mismatch, leader tracking, lattice deviation,
-  smallest largest component) and how many of those ratios lie within 10 %;
+* flock: per (N, start, policy), the median over seeds of swarm / off (and swarm / pairs)
+  for the flock's quality (radius of gyration, velocity mismatch, leader tracking, lattice
+  deviation, smallest largest component) and how many of those ratios lie within 10 %;
 * pairs: per (N, start, policy), the median over (seed, pair) of swarm / pairs for the steady
   error and the band time, and the share of pairs in the 0.5 m band at the end per layer.
 """
@@ -91,24 +91,31 @@ def separation_lines(rows: Sequence[Row]) -> list[str]:
     return lines
 
 
+def _median(v: np.ndarray) -> str:
+    """The median of the finite values (ratios of runs that never entered the band are NaN)."""
+    f = v[np.isfinite(v)]
+    return f"{np.median(f):.3f}" if f.size else "-"
+
+
 def _paired_ratio(a: Sequence[Row], b: Sequence[Row], metric: str, key) -> np.ndarray:
     base = {key(r): _num(r[metric]) for r in b}
     out = [_num(r[metric]) / base[key(r)] for r in a if key(r) in base]
     return np.asarray(out, float)
 
 
-def flock_lines(rows: Sequence[Row]) -> list[str]:
-    """swarm / off, paired by seed: median ratio [share within 10 %] per flock metric."""
+def flock_lines(rows: Sequence[Row], base: str = "off") -> list[str]:
+    """swarm / ``base`` (off or pairs), paired by seed: median ratio [share within 10 %]
+    per flock metric."""
     groups = _groups(rows, True)
-    head = " | ".join(f"{h} swarm/off" for _, h in FLOCK_RATIOS)
+    head = " | ".join(f"{h} swarm/{base}" for _, h in FLOCK_RATIOS)
     lines = [f"| N | start | policy | seeds | {head} |", "|---|---|---|---|" + "---|" * 5]
     for (n, init, pol, layer), g in groups.items():
-        off = groups.get((n, init, pol, "off"))
-        if layer != "swarm" or not off:
+        other = groups.get((n, init, pol, base))
+        if layer != "swarm" or not other:
             continue
         cells = []
         for metric, _ in FLOCK_RATIOS:
-            r = _paired_ratio(g, off, metric, lambda x: x["seed"])
+            r = _paired_ratio(g, other, metric, lambda x: x["seed"])
             ok = np.count_nonzero(np.abs(r - 1) <= _WITHIN)
             cells.append(f"{np.nanmedian(r):.3f} [{ok}/{r.size}]")
         lines.append(f"| {n} | {init} | {pol} | {len(g)} | " + " | ".join(cells) + " |")
@@ -136,8 +143,8 @@ def pair_lines(rows: Sequence[Row]) -> list[str]:
             hit = sum(math.isfinite(_num(r["band_time"])) for r in sel)
             reached.append(f"{hit}/{len(sel)}" if sel else "-")
         lines.append(
-            f"| {n} | {init} | {pol} | {len(g)} | {np.nanmedian(err):.3f} | "
-            f"{np.nanmedian(band):.3f} | {' / '.join(reached)} |"
+            f"| {n} | {init} | {pol} | {len(g)} | {_median(err)} | {_median(band)} | "
+            f"{' / '.join(reached)} |"
         )
     return lines
 
@@ -159,6 +166,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         for title, lines in (
             ("Separation of every two UAVs", separation_lines(rows)),
             ("The flock: swarm layer / no filter, paired by seed", flock_lines(rows)),
+            ("The flock: swarm layer / pair filter, paired by seed", flock_lines(rows, "pairs")),
             ("The pairs: swarm layer / pair filter, paired by seed and pair", pair_lines(rows)),
         ):
             print(f"\n## {title}\n")
