@@ -391,7 +391,7 @@ def test_the_swarm_safety_suite_reports_every_uav_and_the_flock(tmp_path):
         text=True,
         check=True,
     ).stdout
-    assert "| 20 | corners | smc | swarm | 1 |" in report and "swarm/pairs" in report
+    assert "| 20 | corners | smc | 1 |" in report and "swarm/pairs" in report
 
 
 def test_the_nearest_neighbour_figure(tmp_path):

@@ -9,8 +9,9 @@ Each RUN_DIR is a finished benchmark folder whose runs carry the whole swarm's c
 ``--set safety_scope=swarm``); the rows of several folders are pooled. A run's layer is
 ``off`` (no filter), ``pairs`` (the pair filter) or ``swarm`` (the swarm layer). Printed:
 
-* separation: per (N, start, policy, layer), the closest two UAVs over every run, the runs
-  with a step below safety_distance, infeasible UAV-steps (runs with any), active UAV-steps;
+* separation: per (N, start, policy), for each layer the runs with a step below
+  safety_distance and the closest two UAVs over every run, and the swarm layer's infeasible
+  UAV-steps (runs with any) and active UAV-steps;
 * flock: per (N, start, policy), the median over seeds of swarm / off (and swarm / pairs)
   for the flock's quality (radius of gyration, velocity mismatch, leader tracking, lattice
   deviation, smallest largest component) and how many of those ratios lie within 10 %;
@@ -72,21 +73,29 @@ def _groups(rows: Sequence[Row], swarm_only: bool) -> dict[tuple, list[Row]]:
 
 
 def separation_lines(rows: Sequence[Row]) -> list[str]:
-    """The separation table (one row per swarm run)."""
+    """The separation table (one row per swarm run), the layers side by side."""
+    groups = _groups(rows, True)
     lines = [
-        "| N | start | policy | layer | runs | closest two UAVs min (m) | runs with a step "
-        "< D_s | steps < D_s | infeasible UAV-steps | active UAV-steps median |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| N | start | policy | runs | runs with two UAVs < D_s: off / pairs / swarm | "
+        "closest two UAVs (m): off / pairs / swarm | infeasible UAV-steps (swarm) | "
+        "active UAV-steps per run, median (swarm) |",
+        "|---|---|---|---|---|---|---|---|",
     ]
-    for (n, init, pol, layer), g in _groups(rows, True).items():
-        below = np.array([_num(r["swarm_steps_below"]) for r in g])
-        inf = np.array([_num(r["swarm_infeasible_uav_steps"]) for r in g])
-        act = np.median([_num(r["swarm_active_uav_steps"]) for r in g])
-        closest = min(_num(r["swarm_closest"]) for r in g)
+    cases = dict.fromkeys(key[:3] for key in groups)
+    for n, init, pol in cases:
+        by = {lay: groups.get((n, init, pol, lay), []) for lay in ("off", "pairs", "swarm")}
+        below = " / ".join(
+            str(sum(_num(r["swarm_steps_below"]) > 0 for r in g)) if g else "-" for g in by.values()
+        )
+        closest = " / ".join(
+            f"{min(_num(r['swarm_closest']) for r in g):.3f}" if g else "-" for g in by.values()
+        )
+        sw = by["swarm"]
+        inf = np.array([_num(r["swarm_infeasible_uav_steps"]) for r in sw])
         infc = f"{int(inf.sum())} ({int(np.count_nonzero(inf))} runs)" if inf.any() else "0"
+        act = f"{np.median([_num(r['swarm_active_uav_steps']) for r in sw]):.0f}" if sw else "-"
         lines.append(
-            f"| {n} | {init} | {pol} | {layer} | {len(g)} | {closest:.3f} | "
-            f"{int(np.count_nonzero(below))} | {int(below.sum())} | {infc} | {act:.0f} |"
+            f"| {n} | {init or '-'} | {pol} | {len(sw)} | {below} | {closest} | {infc} | {act} |"
         )
     return lines
 
