@@ -134,5 +134,5 @@ def test_what_a_stream_cannot_be_made_from_is_refused(tmp_path):
         setpoint_stream(plane)
     rows, info = setpoint_stream(plane, altitude=1.5)
     assert info["altitude_m"] == 1.5 and np.all(rows[..., 3] == 1.5) and not rows[..., 6].any()
-    with pytest.raises(ValueError, match="no .setpoint. array"):
+    with pytest.raises(ValueError, match=r"no .setpoint. array"):
         setpoint_stream(plane, source="recorded", altitude=1.5)
