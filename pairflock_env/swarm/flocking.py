@@ -17,11 +17,23 @@ flag for non-finite or runaway states.
 
 Two ways to find the pairs, same results: all pairs (O(N^2) per swarm), or a
 :class:`~pairflock_env.swarm.grid.NeighborGrid` (O(N) per swarm for a flock of bounded
-density). The grid path visits the pairs of each UAV i with j > i in increasing j, exactly as
-the all-pairs loop does, so every floating-point sum is formed in the same order and the two
-paths agree bit for bit. Swarms a grid cannot hold (non-finite coordinates) use all pairs.
+density). Swarms a grid cannot hold (non-finite coordinates) use all pairs.
+
+How the sweep runs: each UAV *gathers* its own command (no UAV writes another's), from a
+candidate list of the UAVs within its reach (all of them, or its one-ring of cells), put in
+increasing index order and copied into contiguous per-axis rows. Squared distances, the
+separation (a minimum taken on the bits of the distances, which order like the values) and
+the collision count run as vectorised loops over that list; the neighbours are read off a
+bitmask in increasing index; their forces are added after the pinning term, in that order.
+That is the order in which the symmetric sweep (f_ij added to i and subtracted from j over
+the pairs i < j in turn) forms each sum, and f_ji = -f_ij bit for bit, so all pairs, the grid
+and the symmetric sweep agree to the last bit (tests/reference_flocking.py keeps that sweep as
+the reference). On the grid, the UAVs of a cell share one candidate list and are taken in
+cell order, with positions, velocities and the union-find forest in the same (slot) order:
+memory follows space, so a flight whose UAV indices are scrambled in space costs what a
+sorted one costs. Kernels are specialised per dimension (``dims``), so 2-D and 3-D unroll.
 The per-pair pass for observations and eq. 28 (``pair_pass``) lives in
-:mod:`pairflock_env.swarm.pair_pass` and is re-exported here.
+:mod:`pairflock_env.swarm.pair_pass`.
 
 This is the only implementation of these equations; every view and vehicle model calls it.
 The kernels run single-threaded under numba (compiled code is cached on disk); the small
@@ -35,15 +47,22 @@ from collections import namedtuple
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig
-from pairflock_env.kernels import KernelParams, jit_inline, jit_kernel
+from pairflock_env.kernels import (
+    KernelParams,
+    bits_float,
+    float_bits,
+    jit_inline,
+    jit_kernel,
+    low_bit,
+)
 from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
     check_grid,
-    dist2,
     nearest_d2,
     one_ring,
     ring_bound2,
+    sort_ints,
 )
 
 __all__ = ["FLOCKING", "FlockScalars", "flocking_params", "flocking_pass"]
@@ -164,15 +183,17 @@ def _find(parent, x):
 
 
 @jit_inline
-def _union(parent, size, i, j):
-    """Join the components of i and j, the smaller under the larger (shallow trees)."""
-    x = _find(parent, i)
+def _join(parent, size, x, j):
+    """Join the component of root x and that of UAV j, the smaller under the larger
+    (shallow trees); returns the root of the joined component."""
     y = _find(parent, j)
-    if x != y:
-        if size[x] > size[y]:
-            x, y = y, x
-        parent[x] = y
-        size[y] += size[x]
+    if x == y:
+        return x
+    if size[x] > size[y]:
+        x, y = y, x
+    parent[x] = y
+    size[y] += size[x]
+    return y
 
 
 @jit_inline
@@ -185,145 +206,250 @@ def _largest_component(parent, size):
 
 
 @jit_inline
-def _pair_force(q, p, prm, b, i, j, d2, acc):
-    """Eqs. 13-18 for the neighbours i < j: symmetric, so f_ij = -f_ji."""
+def _pair_force(prm, d2, dq0, dq1, dq2, dp0, dp1, dp2):
+    """Eqs. 13-18: the force f_ij of neighbour j on UAV i at squared distance d2, from the
+    offset dq = q_j - q_i and the relative velocity dp = p_j - p_i (three components; the
+    third is zero and unused in 2-D). Odd in (dq, dp), so f_ji = -f_ij bit for bit."""
     w = prm.attraction - prm.repulsion * np.exp(-d2 * prm.inv_sigma2)
-    for k in range(q.shape[2]):
-        f = w * (q[b, j, k] - q[b, i, k]) + prm.consensus * (p[b, j, k] - p[b, i, k])
-        acc[b, i, k] += f
-        acc[b, j, k] -= f
+    c = prm.consensus
+    return w * dq0 + c * dp0, w * dq1 + c * dp1, w * dq2 + c * dp2
+
+
+# Rows of the float scratch of a pass (each of length N rounded up to whole 64-bit words):
+# positions and velocities of every UAV in slot order, then of the current candidate list,
+# then the squared distances from one UAV to its candidates (and their bits, as uint64).
+_QS, _PS, _CQ, _CP, _ROW = 0, 3, 6, 9, 12
+# Rows of the int scratch: the UAV in each slot and the slot of each UAV; the candidates'
+# indices, their slots and where each slot sits in the list; the union-find forest over
+# slots (parent, size); one UAV's neighbours (positions in the candidate list).
+_ORDER, _SLOT_OF, _CIDX, _CSLOT, _POS_OF, _PARENT, _SIZE, _NB, _TMP, _HIST = range(10)
 
 
 @jit_inline
-def _separation(min_d2, b, i, j, partner_i, d2):
-    """Nearest non-partner distances of i and j, updated with their pair."""
-    if j != partner_i:
-        if d2 < min_d2[b, i]:
-            min_d2[b, i] = d2
-        if d2 < min_d2[b, j]:
-            min_d2[b, j] = d2
+def _sort_indices(a, n, tmp, hist, n_max):
+    """Sort the distinct indices a[:n] (each < n_max) in place: insertion for short lists,
+    else a radix sort by bytes (lowest first), whose cost does not depend on the order
+    the indices come in (a bitmap's or an insertion sort's does)."""
+    if n <= 16:
+        sort_ints(a, n)
+        return
+    shift = 0
+    src, dst = a, tmp
+    while shift == 0 or (n_max - 1) >> shift > 0:
+        for d in range(256):
+            hist[d] = 0
+        for c in range(n):
+            hist[(src[c] >> shift) & 255] += 1
+        total = 0
+        for d in range(256):
+            total, hist[d] = total + hist[d], total
+        for c in range(n):
+            d = (src[c] >> shift) & 255
+            dst[hist[d]] = src[c]
+            hist[d] += 1
+        src, dst = dst, src
+        shift += 8
+    if src is not a:
+        for c in range(n):
+            a[c] = src[c]
 
 
-@jit_kernel
-def _pass_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size):
-    """Every pair i < j of swarm b; returns the number of collisions."""
-    N = q.shape[1]
+@jit_inline
+def _copy_slots(q, p, b, order, fw, iw, three):
+    """Positions and velocities of swarm b in slot order (slot s holds UAV ``order[s]``),
+    and the slot of every UAV."""
+    for s in range(q.shape[1]):
+        i = order[s]
+        iw[_SLOT_OF, i] = s
+        for k in range(3 if three else 2):
+            fw[_QS + k, s] = q[b, i, k]
+            fw[_PS + k, s] = p[b, i, k]
+
+
+@jit_inline
+def _gather(n, fw, iw, three):
+    """The candidate list's positions and velocities (from their slots), and where each
+    candidate's slot sits in the list."""
+    for c in range(n):
+        s = iw[_CSLOT, c]
+        iw[_POS_OF, s] = c
+        for k in range(3 if three else 2):
+            fw[_CQ + k, c] = fw[_QS + k, s]
+            fw[_CP + k, c] = fw[_PS + k, s]
+
+
+@jit_inline
+def _row_d2(fw, n, x0, x1, x2, three):
+    """Squared distances from (x0, x1, x2) to the first n candidates, summed over axes in
+    order as :func:`~pairflock_env.swarm.grid.dist2` (the same numbers; this vectorises)."""
+    for c in range(n):
+        a = fw[_CQ, c] - x0
+        e = fw[_CQ + 1, c] - x1
+        d2 = a * a + e * e
+        if three:
+            z = fw[_CQ + 2, c] - x2
+            d2 += z * z
+        fw[_ROW, c] = d2
+
+
+@jit_inline
+def _gather_uav(s, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three):
+    """UAV x (in slot s) against the candidate list (indices in increasing order, every
+    UAV within reach of x among them, x too): x's separation and flocking command, and
+    its edges of the interaction graph; returns the collisions seen from x.
+
+    UAV x gathers its own command: the pinning term, then f_xj of each neighbour j in
+    increasing j. That is the order in which the symmetric sweep of the equations (f_ij
+    added to i and subtracted from j, pairs i < j in order) forms the sum, and f_xj = -f_jx
+    bit for bit: the command is the same to the last bit, and no UAV writes another's.
+    """
+    row, rowu, cidx, nb = fw[_ROW], fwu[_ROW], iw[_CIDX], iw[_NB]
+    sx = iw[_POS_OF, s]
+    x0, x1, v0, v1 = fw[_CQ, sx], fw[_CQ + 1, sx], fw[_CP, sx], fw[_CP + 1, sx]
+    x2 = fw[_CQ + 2, sx] if three else 0.0
+    v2 = fw[_CP + 2, sx] if three else 0.0
+    _row_d2(fw, n, x0, x1, x2, three)
+    row[sx] = np.inf  # itself: no neighbour, no separation, no collision
+    px = partner[x]
+    inf_bits = float_bits(np.inf)
+    m = inf_bits
     nc = 0
-    for i in range(N):
-        pi = partner[i]
-        for j in range(i + 1, N):
-            d2 = dist2(q, b, i, j)
-            _separation(min_d2, b, i, j, pi, d2)
-            if d2 < prm.collision_distance2:
-                nc += 1
-            if d2 < prm.radius2:
-                _pair_force(q, p, prm, b, i, j, d2, acc)
-                _union(parent, size, i, j)
+    for c in range(n):  # separation (the partner left out) and collisions: vectorised
+        v = rowu[c] if cidx[c] != px else inf_bits
+        m = v if v < m else m
+        nc += row[c] < prm.collision_distance2
+    min_d2[b, x] = bits_float(m)
+    k = 0
+    for w in range((n + 63) >> 6):  # the neighbours, in increasing index
+        bits = np.uint64(0)
+        for t in range(64):  # (the row is long enough; what lies past n is left out)
+            c = 64 * w + t
+            bits |= np.uint64(row[c] < prm.radius2 and c < n) << np.uint64(t)
+        while bits != 0:
+            nb[k] = 64 * w + low_bit(bits)
+            bits &= bits - np.uint64(1)
+            k += 1
+    f0, f1, f2 = acc[b, x, 0], acc[b, x, 1], acc[b, x, 2] if three else 0.0
+    for t in range(k):
+        c = nb[t]
+        g = _pair_force(
+            prm,
+            row[c],
+            fw[_CQ, c] - x0,
+            fw[_CQ + 1, c] - x1,
+            fw[_CQ + 2, c] - x2 if three else 0.0,
+            fw[_CP, c] - v0,
+            fw[_CP + 1, c] - v1,
+            fw[_CP + 2, c] - v2 if three else 0.0,
+        )
+        f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
+    acc[b, x, 0], acc[b, x, 1] = f0, f1
+    if three:
+        acc[b, x, 2] = f2
+    parent, size = iw[_PARENT], iw[_SIZE]
+    # the interaction graph (over slots), each edge once: from x to the neighbours of
+    # larger index, which follow x in the candidate list
+    first = 0
+    while first < k and nb[first] < sx:
+        first += 1
+    root = _find(parent, s)
+    for t in range(first, k):
+        root = _join(parent, size, root, iw[_CSLOT, nb[t]])
     return nc
 
 
-@jit_inline
-def _sort_by_index(nb_j, nb_d2, n):
-    """Insertion sort of the first n neighbours by index (the lists are short)."""
-    for t in range(1, n):
-        j, d2 = nb_j[t], nb_d2[t]
-        s = t
-        while s > 0 and nb_j[s - 1] > j:
-            nb_j[s] = nb_j[s - 1]
-            nb_d2[s] = nb_d2[s - 1]
-            s -= 1
-        nb_j[s] = j
-        nb_d2[s] = d2
+@jit_kernel
+def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
+    """Every UAV of swarm b against every other; returns the number of collisions."""
+    three = len(dims) == 3
+    N = q.shape[1]
+    for i in range(N):  # slots, and the candidate list, in index order
+        iw[_ORDER, i] = iw[_CIDX, i] = iw[_CSLOT, i] = i
+    _copy_slots(q, p, b, iw[_ORDER], fw, iw, three)
+    _gather(N, fw, iw, three)
+    nc = 0
+    for x in range(N):
+        nc += _gather_uav(x, x, N, partner, prm, b, acc, min_d2, fw, fwu, iw, three)
+    return nc // 2  # each pair was seen from both sides
 
 
 @jit_kernel
-def _pass_grid(q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2):
-    """:func:`_pass_all_pairs` over the grid's one-ring pairs, same order and results."""
+def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
+    """:func:`_sweep_all_pairs` on the grid, cell by cell: the UAVs of a cell share one
+    candidate list (its one-ring, put in index order once), and UAVs, candidates and the
+    union-find forest are all held in slot (cell) order, so that memory follows space
+    whatever the indices. The same results."""
+    three = len(dims) == 3
     N = q.shape[1]
+    order = g.order[b]
+    _copy_slots(q, p, b, order, fw, iw, three)
+    cidx, cslot = iw[_CIDX], iw[_CSLOT]
     nc = 0
-    for i in range(N):
-        pi = partner[i]
-        n_bk = one_ring(q, b, i, g, g.buckets)
+    s = 0
+    while s < N:  # slots s..end-1: the UAVs of one bucket (one UAV when folded)
+        end = g.start[b, g.bucket[b, order[s]] + 1] if g.n_ring[b] > 0 else s + 1
         n = 0
-        for t in range(n_bk):
+        for t in range(one_ring(q, b, order[s], g, g.buckets)):
             bk = g.buckets[t]
-            end = g.start[b, bk + 1]
-            s0 = end  # bucket lists increase: the UAVs after i are a tail
-            while s0 > g.start[b, bk] and g.order[b, s0 - 1] > i:
-                s0 -= 1
-            for s in range(s0, end):
-                j = g.order[b, s]
-                d2 = dist2(q, b, i, j)
-                _separation(min_d2, b, i, j, pi, d2)
-                if d2 < prm.collision_distance2:
-                    nc += 1
-                if d2 < prm.radius2:
-                    _union(parent, size, i, j)
-                    nb_j[n] = j
-                    nb_d2[n] = d2
-                    n += 1
-        _sort_by_index(nb_j, nb_d2, n)
-        for t in range(n):
-            _pair_force(q, p, prm, b, i, nb_j[t], nb_d2[t], acc)
+            for s2 in range(g.start[b, bk], g.start[b, bk + 1]):
+                cidx[n] = order[s2]
+                n += 1
+        _sort_indices(cidx, n, iw[_TMP], iw[_HIST], N)
+        for c in range(n):
+            cslot[c] = iw[_SLOT_OF, cidx[c]]
+        _gather(n, fw, iw, three)
+        for s2 in range(s, end):
+            x = order[s2]
+            nc += _gather_uav(s2, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three)
+        s = end
     # the one-ring proves separations shorter than a cell; the others need a wider search
     bound = ring_bound2(g, 1)
     for i in range(N):
         if not min_d2[b, i] < bound:
             min_d2[b, i] = nearest_d2(q, b, i, partner[i], g, min_d2[b, i], 1)
-    return nc
+    return nc // 2
 
 
 @jit_kernel
-def _flock_swarms(q, p, ql, pl, h, partner, prm, out, work, g):
-    """Every swarm: grid pass where ``g`` holds the swarm, all pairs otherwise."""
+def _flock_swarms(q, p, ql, pl, h, partner, prm, out, fw, fwu, iw, g, dims):
+    """Every swarm: grid pass where ``g`` holds the swarm, all pairs otherwise. ``dims``:
+    a tuple of ``dim`` entries, so that each dimension compiles its own kernels."""
     acc, min_d2, n_coll, lcc, bad, vmis, vmax = out
-    parent, size, nb_j, nb_d2 = work
+    parent, size = iw[_PARENT], iw[_SIZE]
     n_unpaired = _count_unpaired(partner)
     for b in range(q.shape[0]):
         _velocity_mismatch(p, pl, partner, n_unpaired, b, vmis, vmax)
         bad[b] = _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size)
         if g is not None and g.ok[b]:
-            n_coll[b] = _pass_grid(q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2)
+            args = (acc, min_d2, fw, fwu, iw, dims)
+            n_coll[b] = _sweep_grid(q, p, partner, prm, b, g, *args)
         else:
-            n_coll[b] = _pass_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size)
-        lcc[b] = _largest_component(parent, size)
+            n_coll[b] = _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims)
+        lcc[b] = _largest_component(parent[: q.shape[1]], size)
 
 
 # The entry points take arrays one by one: the dispatcher types plain arrays fastest, which
 # matters for small swarms, where a pass takes a few microseconds.
 @jit_kernel
-def _flocking_kernel(
-    q, p, ql, pl, h, partner, prm, acc, min_d2, ncol, lcc, bad, vmis, vmax, parent, size, nbj, nbd
-):
-    out = (acc, min_d2, ncol, lcc, bad, vmis, vmax)
-    _flock_swarms(q, p, ql, pl, h, partner, _scalars(prm), out, (parent, size, nbj, nbd), None)
+def _flocking_kernel(q, p, ql, pl, h, prt, prm, dims, acc, md2, nc, lcc, bad, vm, vx, fw, fu, iw):
+    out = (acc, md2, nc, lcc, bad, vm, vx)
+    _flock_swarms(q, p, ql, pl, h, prt, _scalars(prm), out, fw, fu, iw, None, dims)
 
 
 @jit_kernel
 def _flocking_grid_kernel(
-    q,
-    p,
-    ql,
-    pl,
-    h,
-    partner,
-    prm,
-    acc,
-    min_d2,
-    ncol,
-    lcc,
-    bad,
-    vmis,
-    vmax,
-    parent,
-    size,
-    nbj,
-    nbd,
-    *grid,
+    q, p, ql, pl, h, prt, prm, dims, acc, md2, nc, lcc, bad, vm, vx, fw, fu, iw, *grid
 ):
-    out = (acc, min_d2, ncol, lcc, bad, vmis, vmax)
-    work = (parent, size, nbj, nbd)
-    _flock_swarms(q, p, ql, pl, h, partner, _scalars(prm), out, work, GridArrays(*grid))
+    out = (acc, md2, nc, lcc, bad, vm, vx)
+    g = GridArrays(*grid)
+    _flock_swarms(q, p, ql, pl, h, prt, _scalars(prm), out, fw, fu, iw, g, dims)
+
+
+#: the outputs of a pass, in the kernels' order
+_FLOCK_KEYS = ("acc", "min_d2", "collisions", "largest_component", "diverged")
+_FLOCK_KEYS += ("velocity_mismatch", "velocity_mismatch_max", "_fw", "_fwu", "_iw")
+#: the ``dims`` argument of the kernels, by dimension
+_DIMS = {2: (0, 0), 3: (0, 0, 0)}
 
 
 def flocking_pass(
@@ -365,6 +491,7 @@ def flocking_pass(
         "max(radius, collision_distance)",
     )
     if out is None or out["acc"].shape != q.shape:
+        words = (N + 63) // 64
         out = {
             "acc": np.empty((B, N, D)),
             "min_d2": np.empty((B, N)),
@@ -373,31 +500,13 @@ def flocking_pass(
             "diverged": np.empty(B, np.bool_),
             "velocity_mismatch": np.empty(B),
             "velocity_mismatch_max": np.empty(B),
-            "_parent": np.empty(N, np.int64),
-            "_size": np.empty(N, np.int64),
-            "_nb_j": np.empty(N, np.int64),
-            "_nb_d2": np.empty(N),
+            # scratch: see _QS ... and _ORDER ... above
+            "_fw": np.zeros((_ROW + 1, 64 * words)),
+            "_iw": np.zeros((_HIST + 1, max(64 * words, 256)), np.int64),
         }
-    args = (
-        q,
-        p,
-        leader_q,
-        leader_p,
-        pinned,
-        partner,
-        params,
-        out["acc"],
-        out["min_d2"],
-        out["collisions"],
-        out["largest_component"],
-        out["diverged"],
-        out["velocity_mismatch"],
-        out["velocity_mismatch_max"],
-        out["_parent"],
-        out["_size"],
-        out["_nb_j"],
-        out["_nb_d2"],
-    )
+        out["_fwu"] = out["_fw"].view(np.uint64)
+    args = (q, p, leader_q, leader_p, pinned, partner, params, _DIMS[D])
+    args += tuple(out[k] for k in _FLOCK_KEYS)
     if grid is None:
         _flocking_kernel(*args)
     else:
