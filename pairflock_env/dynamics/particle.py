@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig
+from pairflock_env.kernels import jit_kernel
 
 __all__ = ["ParticleModel"]
 
@@ -28,6 +29,13 @@ class ParticleModel:
         pass
 
     def advance(self, q: np.ndarray, p: np.ndarray, a_des: np.ndarray) -> None:
+        if not (q.flags.c_contiguous and p.flags.c_contiguous and a_des.shape == q.shape):
+            return self._advance_numpy(q, p, a_des)
+        _advance_kernel(
+            q.reshape(-1), p.reshape(-1), a_des.reshape(-1), self.h, self.substeps, self.exact
+        )
+
+    def _advance_numpy(self, q: np.ndarray, p: np.ndarray, a_des: np.ndarray) -> None:
         h = self.h
         if self.exact:
             T = h * self.substeps
@@ -41,3 +49,22 @@ class ParticleModel:
 
     def info(self) -> dict[str, np.ndarray]:
         return {}
+
+
+@jit_kernel
+def _advance_kernel(q, p, a, h, substeps, exact):
+    """:meth:`ParticleModel.advance` element by element (the same operations, in order)."""
+    if exact:
+        T = h * substeps
+        c = 0.5 * T * T
+        for e in range(q.shape[0]):
+            q[e] += p[e] * T + c * a[e]
+            p[e] += a[e] * T
+        return
+    for e in range(q.shape[0]):
+        dv = a[e] * h
+        pe, qe = p[e], q[e]
+        for _ in range(substeps):
+            pe += dv
+            qe += pe * h
+        p[e], q[e] = pe, qe

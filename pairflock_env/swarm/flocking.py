@@ -209,8 +209,15 @@ def _largest_component(parent, size):
 def _pair_force(prm, d2, dq0, dq1, dq2, dp0, dp1, dp2):
     """Eqs. 13-18: the force f_ij of neighbour j on UAV i at squared distance d2, from the
     offset dq = q_j - q_i and the relative velocity dp = p_j - p_i (three components; the
-    third is zero and unused in 2-D). Odd in (dq, dp), so f_ji = -f_ij bit for bit."""
+    third is zero and unused in 2-D), and its weight w = a - g_r(||q_j - q_i||). Odd in
+    (dq, dp), so f_ji = -f_ij bit for bit."""
     w = prm.attraction - prm.repulsion * np.exp(-d2 * prm.inv_sigma2)
+    return _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2), w
+
+
+@jit_inline
+def _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2):
+    """f_ij = w dq + b dp from the weight :func:`_pair_force` gave the pair."""
     c = prm.consensus
     return w * dq0 + c * dp0, w * dq1 + c * dp1, w * dq2 + c * dp2
 
@@ -332,16 +339,10 @@ def _gather_uav(s, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three):
     f0, f1, f2 = acc[b, x, 0], acc[b, x, 1], acc[b, x, 2] if three else 0.0
     for t in range(k):
         c = nb[t]
-        g = _pair_force(
-            prm,
-            row[c],
-            fw[_CQ, c] - x0,
-            fw[_CQ + 1, c] - x1,
-            fw[_CQ + 2, c] - x2 if three else 0.0,
-            fw[_CP, c] - v0,
-            fw[_CP + 1, c] - v1,
-            fw[_CP + 2, c] - v2 if three else 0.0,
-        )
+        dq2 = fw[_CQ + 2, c] - x2 if three else 0.0
+        dp2 = fw[_CP + 2, c] - v2 if three else 0.0
+        dq0, dq1 = fw[_CQ, c] - x0, fw[_CQ + 1, c] - x1
+        g = _pair_force(prm, row[c], dq0, dq1, dq2, fw[_CP, c] - v0, fw[_CP + 1, c] - v1, dp2)[0]
         f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
     acc[b, x, 0], acc[b, x, 1] = f0, f1
     if three:
@@ -371,6 +372,88 @@ def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
     for x in range(N):
         nc += _gather_uav(x, x, N, partner, prm, b, acc, min_d2, fw, fwu, iw, three)
     return nc // 2  # each pair was seen from both sides
+
+
+@jit_kernel
+def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
+    """:func:`_sweep_all_pairs` with each pair met once: UAV x against the UAVs after it
+    (distances, both separations, collisions, weights), the weight of each of its neighbours
+    after it kept in ``wm[x, j]`` and x marked in that neighbour's bits ``lb[j]``, so that
+    x finds its neighbours before it, in order, with their weights. The same sums in the
+    same order; half the distances and exponentials. Needs ``wm`` of N x N."""
+    three = len(dims) == 3
+    N = q.shape[1]
+    for i in range(N):  # slots, and the candidate list, in index order
+        iw[_ORDER, i] = iw[_CIDX, i] = iw[_CSLOT, i] = i
+        for w in range(lb.shape[1]):
+            lb[i, w] = 0
+    _copy_slots(q, p, b, iw[_ORDER], fw, iw, three)
+    _gather(N, fw, iw, three)
+    row, rowu, parent, size = fw[_ROW], fwu[_ROW], iw[_PARENT], iw[_SIZE]
+    cq0, cq1, cp0, cp1 = fw[_CQ], fw[_CQ + 1], fw[_CP], fw[_CP + 1]
+    cq2, cp2 = fw[_CQ + 2], fw[_CP + 2]
+    inf_bits = float_bits(np.inf)
+    one = np.uint64(1)
+    nc = 0
+    for x in range(N):
+        x0, x1, v0, v1 = cq0[x], cq1[x], cp0[x], cp1[x]
+        x2 = cq2[x] if three else 0.0
+        v2 = cp2[x] if three else 0.0
+        # the UAVs after x (loops over views from 0: numba vectorises those)
+        lo = x + 1
+        r, ru, md = row[lo:N], rowu[lo:N], min_d2[b, lo:N]
+        a0, a1, a2 = cq0[lo:N], cq1[lo:N], cq2[lo:N]
+        skip = partner[x] - lo  # x's partner: no separation between the two
+        m = float_bits(min_d2[b, x])
+        for t in range(r.shape[0]):  # distances, both separations, collisions
+            a, e = a0[t] - x0, a1[t] - x1
+            d2 = a * a + e * e  # summed over axes in order, as grid.dist2
+            if three:
+                z = a2[t] - x2
+                d2 += z * z
+            r[t] = d2
+            other = t != skip
+            v = float_bits(d2) if other else inf_bits
+            m = v if v < m else m
+            nc += d2 < prm.collision_distance2
+            mj = md[t]
+            md[t] = d2 if (d2 < mj) & other else mj
+        min_d2[b, x] = bits_float(m)
+        f0, f1, f2 = acc[b, x, 0], acc[b, x, 1], acc[b, x, 2] if three else 0.0
+        for w in range((x >> 6) + 1):  # the neighbours before x, in increasing index
+            bits = lb[x, w]
+            while bits != 0:
+                j = 64 * w + low_bit(bits)
+                bits &= bits - one
+                dq2 = cq2[j] - x2 if three else 0.0
+                dp2 = cp2[j] - v2 if three else 0.0
+                g = _weighted_force(
+                    prm, wm[j, x], cq0[j] - x0, cq1[j] - x1, dq2, cp0[j] - v0, cp1[j] - v1, dp2
+                )
+                f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
+        root = _find(parent, x)
+        bit_x = one << np.uint64(x & 63)
+        for w in range(lo >> 6, (N + 63) >> 6):  # the neighbours after x, in order
+            bits = np.uint64(0)
+            rw, first, end = row[64 * w : 64 * w + 64], lo - 64 * w, N - 64 * w
+            for t in range(64):
+                near = (rw[t] < prm.radius2) & (t >= first) & (t < end)
+                bits |= np.uint64(near) << np.uint64(t)
+            while bits != 0:
+                j = 64 * w + low_bit(bits)
+                bits &= bits - one
+                dq2 = cq2[j] - x2 if three else 0.0
+                dp2 = cp2[j] - v2 if three else 0.0
+                g, wm[x, j] = _pair_force(
+                    prm, row[j], cq0[j] - x0, cq1[j] - x1, dq2, cp0[j] - v0, cp1[j] - v1, dp2
+                )
+                lb[j, x >> 6] |= bit_x
+                f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
+                root = _join(parent, size, root, j)
+        acc[b, x, 0], acc[b, x, 1] = f0, f1
+        if three:
+            acc[b, x, 2] = f2
+    return nc
 
 
 @jit_kernel
@@ -411,7 +494,7 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
 
 
 @jit_kernel
-def _flock_swarms(q, p, ql, pl, h, partner, prm, out, fw, fwu, iw, g, dims):
+def _flock_swarms(q, p, ql, pl, h, partner, prm, out, fw, fwu, iw, wm, lb, g, dims):
     """Every swarm: grid pass where ``g`` holds the swarm, all pairs otherwise. ``dims``:
     a tuple of ``dim`` entries, so that each dimension compiles its own kernels."""
     acc, min_d2, n_coll, lcc, bad, vmis, vmax = out
@@ -423,6 +506,9 @@ def _flock_swarms(q, p, ql, pl, h, partner, prm, out, fw, fwu, iw, g, dims):
         if g is not None and g.ok[b]:
             args = (acc, min_d2, fw, fwu, iw, dims)
             n_coll[b] = _sweep_grid(q, p, partner, prm, b, g, *args)
+        elif wm.shape[0] >= q.shape[1]:
+            args = (acc, min_d2, fw, fwu, iw, wm, lb, dims)
+            n_coll[b] = _sweep_pairs(q, p, partner, prm, b, *args)
         else:
             n_coll[b] = _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims)
         lcc[b] = _largest_component(parent[: q.shape[1]], size)
@@ -431,23 +517,26 @@ def _flock_swarms(q, p, ql, pl, h, partner, prm, out, fw, fwu, iw, g, dims):
 # The entry points take arrays one by one: the dispatcher types plain arrays fastest, which
 # matters for small swarms, where a pass takes a few microseconds.
 @jit_kernel
-def _flocking_kernel(q, p, ql, pl, h, prt, prm, dims, acc, md2, nc, lcc, bad, vm, vx, fw, fu, iw):
+def _flocking_kernel(q, p, ql, pl, h, prt, prm, dims, acc, md2, nc, lcc, bad, vm, vx, *work):
     out = (acc, md2, nc, lcc, bad, vm, vx)
-    _flock_swarms(q, p, ql, pl, h, prt, _scalars(prm), out, fw, fu, iw, None, dims)
+    _flock_swarms(q, p, ql, pl, h, prt, _scalars(prm), out, *work, None, dims)
 
 
 @jit_kernel
 def _flocking_grid_kernel(
-    q, p, ql, pl, h, prt, prm, dims, acc, md2, nc, lcc, bad, vm, vx, fw, fu, iw, *grid
+    q, p, ql, pl, h, prt, prm, dims, acc, md2, nc, lcc, bad, vm, vx, fw, fu, iw, wm, lb, *grid
 ):
     out = (acc, md2, nc, lcc, bad, vm, vx)
     g = GridArrays(*grid)
-    _flock_swarms(q, p, ql, pl, h, prt, _scalars(prm), out, fw, fu, iw, g, dims)
+    _flock_swarms(q, p, ql, pl, h, prt, _scalars(prm), out, fw, fu, iw, wm, lb, g, dims)
 
 
 #: the outputs of a pass, in the kernels' order
 _FLOCK_KEYS = ("acc", "min_d2", "collisions", "largest_component", "diverged")
-_FLOCK_KEYS += ("velocity_mismatch", "velocity_mismatch_max", "_fw", "_fwu", "_iw")
+_FLOCK_KEYS += ("velocity_mismatch", "velocity_mismatch_max", "_fw", "_fwu", "_iw", "_wm", "_lb")
+#: all pairs meet each pair once (:func:`_sweep_pairs`) up to this many UAVs, whose N x N
+#: weights take 2 MB; beyond, each UAV meets the others in turn (:func:`_sweep_all_pairs`)
+_PAIRS_MAX = 512
 #: the ``dims`` argument of the kernels, by dimension
 _DIMS = {2: (0, 0), 3: (0, 0, 0)}
 
@@ -483,14 +572,26 @@ def flocking_pass(
         and max of ||p_i - p_leader|| over the unpaired UAVs (all UAVs when every UAV is
         paired). Per-swarm sums run sequentially, so results do not depend on B.
     """
-    B, N, D = q.shape
+    return flocking_runner(params, q.shape, grid, out)(q, p, leader_q, leader_p, pinned, partner)
+
+
+def flocking_runner(
+    params: np.ndarray,
+    shape: tuple[int, int, int],
+    grid: NeighborGrid | None = None,
+    out: dict[str, np.ndarray] | None = None,
+):
+    """:func:`flocking_pass` for repeated calls on arrays of ``shape`` (B, N, dim): the grid
+    checked and the outputs allocated (or ``out`` reused) once. Returns
+    ``run(q, p, leader_q, leader_p, pinned, partner) -> out`` (the same dict every call)."""
+    B, N, D = shape
     check_grid(
         grid,
-        q.shape,
+        tuple(shape),
         max(params[_F.radius2], params[_F.collision_distance2]),
         "max(radius, collision_distance)",
     )
-    if out is None or out["acc"].shape != q.shape:
+    if out is None or out["acc"].shape != tuple(shape):
         words = (N + 63) // 64
         out = {
             "acc": np.empty((B, N, D)),
@@ -505,10 +606,21 @@ def flocking_pass(
             "_iw": np.zeros((_HIST + 1, max(64 * words, 256)), np.int64),
         }
         out["_fwu"] = out["_fw"].view(np.uint64)
-    args = (q, p, leader_q, leader_p, pinned, partner, params, _DIMS[D])
-    args += tuple(out[k] for k in _FLOCK_KEYS)
+        n_wm = N if grid is None and N <= _PAIRS_MAX else 0  # (the grid's fallback: rows)
+        out["_wm"] = np.zeros((n_wm, n_wm))
+        out["_lb"] = np.zeros((n_wm, words), np.uint64)
+    tail = (params, _DIMS[D], *(out[k] for k in _FLOCK_KEYS))
     if grid is None:
-        _flocking_kernel(*args)
+
+        def run(q, p, leader_q, leader_p, pinned, partner):
+            _flocking_kernel(q, p, leader_q, leader_p, pinned, partner, *tail)
+            return out
+
     else:
-        _flocking_grid_kernel(*args, *grid.arrays)
-    return out
+        tail += tuple(grid.arrays)
+
+        def run(q, p, leader_q, leader_p, pinned, partner):
+            _flocking_grid_kernel(q, p, leader_q, leader_p, pinned, partner, *tail)
+            return out
+
+    return run
