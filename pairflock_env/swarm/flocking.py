@@ -383,15 +383,15 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
     same order; half the distances and exponentials. Needs ``wm`` of N x N."""
     three = len(dims) == 3
     N = q.shape[1]
-    for i in range(N):  # slots, and the candidate list, in index order
-        iw[_ORDER, i] = iw[_CIDX, i] = iw[_CSLOT, i] = i
+    for i in range(N):  # positions and velocities by axis, in index order
+        for k in range(3 if three else 2):
+            fw[_QS + k, i] = q[b, i, k]
+            fw[_PS + k, i] = p[b, i, k]
         for w in range(lb.shape[1]):
             lb[i, w] = 0
-    _copy_slots(q, p, b, iw[_ORDER], fw, iw, three)
-    _gather(N, fw, iw, three)
-    row, rowu, parent, size = fw[_ROW], fwu[_ROW], iw[_PARENT], iw[_SIZE]
-    cq0, cq1, cp0, cp1 = fw[_CQ], fw[_CQ + 1], fw[_CP], fw[_CP + 1]
-    cq2, cp2 = fw[_CQ + 2], fw[_CP + 2]
+    row, parent, size = fw[_ROW], iw[_PARENT], iw[_SIZE]
+    cq0, cq1, cp0, cp1 = fw[_QS], fw[_QS + 1], fw[_PS], fw[_PS + 1]
+    cq2, cp2 = fw[_QS + 2], fw[_PS + 2]
     inf_bits = float_bits(np.inf)
     one = np.uint64(1)
     nc = 0
@@ -401,10 +401,11 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
         v2 = cp2[x] if three else 0.0
         # the UAVs after x (loops over views from 0: numba vectorises those)
         lo = x + 1
-        r, ru, md = row[lo:N], rowu[lo:N], min_d2[b, lo:N]
+        r, md = row[lo:N], min_d2[b, lo:N]
         a0, a1, a2 = cq0[lo:N], cq1[lo:N], cq2[lo:N]
         skip = partner[x] - lo  # x's partner: no separation between the two
         m = float_bits(min_d2[b, x])
+        near = 0
         for t in range(r.shape[0]):  # distances, both separations, collisions
             a, e = a0[t] - x0, a1[t] - x1
             d2 = a * a + e * e  # summed over axes in order, as grid.dist2
@@ -416,6 +417,7 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
             v = float_bits(d2) if other else inf_bits
             m = v if v < m else m
             nc += d2 < prm.collision_distance2
+            near += d2 < prm.radius2
             mj = md[t]
             md[t] = d2 if (d2 < mj) & other else mj
         min_d2[b, x] = bits_float(m)
@@ -433,12 +435,12 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
                 f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
         root = _find(parent, x)
         bit_x = one << np.uint64(x & 63)
-        for w in range(lo >> 6, (N + 63) >> 6):  # the neighbours after x, in order
+        for w in range(lo >> 6, (N + 63) >> 6 if near else 0):  # neighbours after x, in order
             bits = np.uint64(0)
             rw, first, end = row[64 * w : 64 * w + 64], lo - 64 * w, N - 64 * w
             for t in range(64):
-                near = (rw[t] < prm.radius2) & (t >= first) & (t < end)
-                bits |= np.uint64(near) << np.uint64(t)
+                hit = (rw[t] < prm.radius2) & (t >= first) & (t < end)
+                bits |= np.uint64(hit) << np.uint64(t)
             while bits != 0:
                 j = 64 * w + low_bit(bits)
                 bits &= bits - one
