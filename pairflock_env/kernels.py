@@ -28,7 +28,15 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
-__all__ = ["KernelParams", "bits_float", "float_bits", "jit_inline", "jit_kernel", "low_bit"]
+__all__ = [
+    "BoundKernel",
+    "KernelParams",
+    "bits_float",
+    "float_bits",
+    "jit_inline",
+    "jit_kernel",
+    "low_bit",
+]
 
 jit_kernel = functools.partial(njit, cache=True, nogil=True, _nrt=False)
 jit_inline = functools.partial(njit, cache=True, inline="always", _nrt=False)
@@ -66,6 +74,19 @@ class KernelParams:
     def unpack(self, vector: np.ndarray) -> dict[str, float]:
         """The named values of a packed vector (for tests and messages)."""
         return {n: float(vector[i]) for i, n in enumerate(self.names)}
+
+
+class BoundKernel:
+    """A kernel with its arguments after the state fixed, for repeated calls on the same
+    buffers: ``run(*state)`` calls ``kernel(*state, *tail)`` and returns ``out`` (what the
+    kernel fills). Picklable, unlike a closure, so that an env holding one can be saved."""
+
+    def __init__(self, kernel: Any, tail: tuple, out: Any) -> None:
+        self.kernel, self.tail, self.out = kernel, tail, out
+
+    def __call__(self, *state: Any) -> Any:
+        self.kernel(*state, *self.tail)
+        return self.out
 
 
 # ---------------------------------------------------------------------------------------

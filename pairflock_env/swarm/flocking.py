@@ -48,6 +48,7 @@ import numpy as np
 
 from pairflock_env.config import PairFlockConfig
 from pairflock_env.kernels import (
+    BoundKernel,
     KernelParams,
     bits_float,
     float_bits,
@@ -613,16 +614,5 @@ def flocking_runner(
         out["_lb"] = np.zeros((n_wm, words), np.uint64)
     tail = (params, _DIMS[D], *(out[k] for k in _FLOCK_KEYS))
     if grid is None:
-
-        def run(q, p, leader_q, leader_p, pinned, partner):
-            _flocking_kernel(q, p, leader_q, leader_p, pinned, partner, *tail)
-            return out
-
-    else:
-        tail += tuple(grid.arrays)
-
-        def run(q, p, leader_q, leader_p, pinned, partner):
-            _flocking_grid_kernel(q, p, leader_q, leader_p, pinned, partner, *tail)
-            return out
-
-    return run
+        return BoundKernel(_flocking_kernel, tail, out)
+    return BoundKernel(_flocking_grid_kernel, (*tail, *grid.arrays), out)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pairflock_env.kernels import jit_inline, jit_kernel
+from pairflock_env.kernels import BoundKernel, jit_inline, jit_kernel
 from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
@@ -155,16 +155,5 @@ def pair_runner(
     keys = ("shared", "nbr_pos", "nbr_vel", "nbr_mask", "_best_d2", "_best_j")
     tail = (agents, partners, radius**2, *(out[k] for k in keys))
     if grid is None:
-
-        def run(q, p):
-            _pair_kernel(q, p, *tail)
-            return out
-
-    else:
-        tail += tuple(grid.arrays)
-
-        def run(q, p):
-            _pair_grid_kernel(q, p, *tail)
-            return out
-
-    return run
+        return BoundKernel(_pair_kernel, tail, out)
+    return BoundKernel(_pair_grid_kernel, (*tail, *grid.arrays), out)
