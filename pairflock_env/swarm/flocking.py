@@ -63,7 +63,30 @@ from pairflock_env.swarm.grid import (
     nearest_d2,
     one_ring,
     ring_bound2,
-    sort_ints,
+)
+from pairflock_env.swarm.slots import (
+    CIDX,
+    CP,
+    CQ,
+    CSLOT,
+    HIST,
+    NB,
+    ORDER,
+    PARENT,
+    POS_OF,
+    PS,
+    QS,
+    ROW,
+    SIZE,
+    SLOT_OF,
+    TMP,
+    copy_slots,
+    find,
+    gather,
+    join,
+    largest_component,
+    row_d2,
+    sort_indices,
 )
 
 __all__ = ["FLOCKING", "FlockScalars", "flocking_params", "flocking_pass"]
@@ -175,38 +198,6 @@ def _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size):
 
 
 @jit_inline
-def _find(parent, x):
-    """Root of x in the union-find forest, halving the path on the way."""
-    while parent[x] != x:
-        parent[x] = parent[parent[x]]
-        x = parent[x]
-    return x
-
-
-@jit_inline
-def _join(parent, size, x, j):
-    """Join the component of root x and that of UAV j, the smaller under the larger
-    (shallow trees); returns the root of the joined component."""
-    y = _find(parent, j)
-    if x == y:
-        return x
-    if size[x] > size[y]:
-        x, y = y, x
-    parent[x] = y
-    size[y] += size[x]
-    return y
-
-
-@jit_inline
-def _largest_component(parent, size):
-    best = 0
-    for i in range(parent.shape[0]):
-        if parent[i] == i and size[i] > best:
-            best = size[i]
-    return best
-
-
-@jit_inline
 def _pair_force(prm, d2, dq0, dq1, dq2, dp0, dp1, dp2):
     """Eqs. 13-18: the force f_ij of neighbour j on UAV i at squared distance d2, from the
     offset dq = q_j - q_i and the relative velocity dp = p_j - p_i (three components; the
@@ -223,83 +214,6 @@ def _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2):
     return w * dq0 + c * dp0, w * dq1 + c * dp1, w * dq2 + c * dp2
 
 
-# Rows of the float scratch of a pass (each of length N rounded up to whole 64-bit words):
-# positions and velocities of every UAV in slot order, then of the current candidate list,
-# then the squared distances from one UAV to its candidates (and their bits, as uint64).
-_QS, _PS, _CQ, _CP, _ROW = 0, 3, 6, 9, 12
-# Rows of the int scratch: the UAV in each slot and the slot of each UAV; the candidates'
-# indices, their slots and where each slot sits in the list; the union-find forest over
-# slots (parent, size); one UAV's neighbours (positions in the candidate list).
-_ORDER, _SLOT_OF, _CIDX, _CSLOT, _POS_OF, _PARENT, _SIZE, _NB, _TMP, _HIST = range(10)
-
-
-@jit_inline
-def _sort_indices(a, n, tmp, hist, n_max):
-    """Sort the distinct indices a[:n] (each < n_max) in place: insertion for short lists,
-    else a radix sort by bytes (lowest first), whose cost does not depend on the order
-    the indices come in (a bitmap's or an insertion sort's does)."""
-    if n <= 16:
-        sort_ints(a, n)
-        return
-    shift = 0
-    src, dst = a, tmp
-    while shift == 0 or (n_max - 1) >> shift > 0:
-        for d in range(256):
-            hist[d] = 0
-        for c in range(n):
-            hist[(src[c] >> shift) & 255] += 1
-        total = 0
-        for d in range(256):
-            total, hist[d] = total + hist[d], total
-        for c in range(n):
-            d = (src[c] >> shift) & 255
-            dst[hist[d]] = src[c]
-            hist[d] += 1
-        src, dst = dst, src
-        shift += 8
-    if src is not a:
-        for c in range(n):
-            a[c] = src[c]
-
-
-@jit_inline
-def _copy_slots(q, p, b, order, fw, iw, three):
-    """Positions and velocities of swarm b in slot order (slot s holds UAV ``order[s]``),
-    and the slot of every UAV."""
-    for s in range(q.shape[1]):
-        i = order[s]
-        iw[_SLOT_OF, i] = s
-        for k in range(3 if three else 2):
-            fw[_QS + k, s] = q[b, i, k]
-            fw[_PS + k, s] = p[b, i, k]
-
-
-@jit_inline
-def _gather(n, fw, iw, three):
-    """The candidate list's positions and velocities (from their slots), and where each
-    candidate's slot sits in the list."""
-    for c in range(n):
-        s = iw[_CSLOT, c]
-        iw[_POS_OF, s] = c
-        for k in range(3 if three else 2):
-            fw[_CQ + k, c] = fw[_QS + k, s]
-            fw[_CP + k, c] = fw[_PS + k, s]
-
-
-@jit_inline
-def _row_d2(fw, n, x0, x1, x2, three):
-    """Squared distances from (x0, x1, x2) to the first n candidates, summed over axes in
-    order as :func:`~pairflock_env.swarm.grid.dist2` (the same numbers; this vectorises)."""
-    for c in range(n):
-        a = fw[_CQ, c] - x0
-        e = fw[_CQ + 1, c] - x1
-        d2 = a * a + e * e
-        if three:
-            z = fw[_CQ + 2, c] - x2
-            d2 += z * z
-        fw[_ROW, c] = d2
-
-
 @jit_inline
 def _gather_uav(s, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three):
     """UAV x (in slot s) against the candidate list (indices in increasing order, every
@@ -311,12 +225,12 @@ def _gather_uav(s, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three):
     added to i and subtracted from j, pairs i < j in order) forms the sum, and f_xj = -f_jx
     bit for bit: the command is the same to the last bit, and no UAV writes another's.
     """
-    row, rowu, cidx, nb = fw[_ROW], fwu[_ROW], iw[_CIDX], iw[_NB]
-    sx = iw[_POS_OF, s]
-    x0, x1, v0, v1 = fw[_CQ, sx], fw[_CQ + 1, sx], fw[_CP, sx], fw[_CP + 1, sx]
-    x2 = fw[_CQ + 2, sx] if three else 0.0
-    v2 = fw[_CP + 2, sx] if three else 0.0
-    _row_d2(fw, n, x0, x1, x2, three)
+    row, rowu, cidx, nb = fw[ROW], fwu[ROW], iw[CIDX], iw[NB]
+    sx = iw[POS_OF, s]
+    x0, x1, v0, v1 = fw[CQ, sx], fw[CQ + 1, sx], fw[CP, sx], fw[CP + 1, sx]
+    x2 = fw[CQ + 2, sx] if three else 0.0
+    v2 = fw[CP + 2, sx] if three else 0.0
+    row_d2(fw, n, x0, x1, x2, three)
     row[sx] = np.inf  # itself: no neighbour, no separation, no collision
     px = partner[x]
     inf_bits = float_bits(np.inf)
@@ -340,23 +254,23 @@ def _gather_uav(s, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three):
     f0, f1, f2 = acc[b, x, 0], acc[b, x, 1], acc[b, x, 2] if three else 0.0
     for t in range(k):
         c = nb[t]
-        dq2 = fw[_CQ + 2, c] - x2 if three else 0.0
-        dp2 = fw[_CP + 2, c] - v2 if three else 0.0
-        dq0, dq1 = fw[_CQ, c] - x0, fw[_CQ + 1, c] - x1
-        g = _pair_force(prm, row[c], dq0, dq1, dq2, fw[_CP, c] - v0, fw[_CP + 1, c] - v1, dp2)[0]
+        dq2 = fw[CQ + 2, c] - x2 if three else 0.0
+        dp2 = fw[CP + 2, c] - v2 if three else 0.0
+        dq0, dq1 = fw[CQ, c] - x0, fw[CQ + 1, c] - x1
+        g = _pair_force(prm, row[c], dq0, dq1, dq2, fw[CP, c] - v0, fw[CP + 1, c] - v1, dp2)[0]
         f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
     acc[b, x, 0], acc[b, x, 1] = f0, f1
     if three:
         acc[b, x, 2] = f2
-    parent, size = iw[_PARENT], iw[_SIZE]
+    parent, size = iw[PARENT], iw[SIZE]
     # the interaction graph (over slots), each edge once: from x to the neighbours of
     # larger index, which follow x in the candidate list
     first = 0
     while first < k and nb[first] < sx:
         first += 1
-    root = _find(parent, s)
+    root = find(parent, s)
     for t in range(first, k):
-        root = _join(parent, size, root, iw[_CSLOT, nb[t]])
+        root = join(parent, size, root, iw[CSLOT, nb[t]])
     return nc
 
 
@@ -366,9 +280,9 @@ def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
     three = len(dims) == 3
     N = q.shape[1]
     for i in range(N):  # slots, and the candidate list, in index order
-        iw[_ORDER, i] = iw[_CIDX, i] = iw[_CSLOT, i] = i
-    _copy_slots(q, p, b, iw[_ORDER], fw, iw, three)
-    _gather(N, fw, iw, three)
+        iw[ORDER, i] = iw[CIDX, i] = iw[CSLOT, i] = i
+    copy_slots(q, p, b, iw[ORDER], fw, iw, three)
+    gather(N, fw, iw, three)
     nc = 0
     for x in range(N):
         nc += _gather_uav(x, x, N, partner, prm, b, acc, min_d2, fw, fwu, iw, three)
@@ -386,13 +300,13 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
     N = q.shape[1]
     for i in range(N):  # positions and velocities by axis, in index order
         for k in range(3 if three else 2):
-            fw[_QS + k, i] = q[b, i, k]
-            fw[_PS + k, i] = p[b, i, k]
+            fw[QS + k, i] = q[b, i, k]
+            fw[PS + k, i] = p[b, i, k]
         for w in range(lb.shape[1]):
             lb[i, w] = 0
-    row, parent, size = fw[_ROW], iw[_PARENT], iw[_SIZE]
-    cq0, cq1, cp0, cp1 = fw[_QS], fw[_QS + 1], fw[_PS], fw[_PS + 1]
-    cq2, cp2 = fw[_QS + 2], fw[_PS + 2]
+    row, parent, size = fw[ROW], iw[PARENT], iw[SIZE]
+    cq0, cq1, cp0, cp1 = fw[QS], fw[QS + 1], fw[PS], fw[PS + 1]
+    cq2, cp2 = fw[QS + 2], fw[PS + 2]
     inf_bits = float_bits(np.inf)
     one = np.uint64(1)
     nc = 0
@@ -434,7 +348,7 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
                     prm, wm[j, x], cq0[j] - x0, cq1[j] - x1, dq2, cp0[j] - v0, cp1[j] - v1, dp2
                 )
                 f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
-        root = _find(parent, x)
+        root = find(parent, x)
         bit_x = one << np.uint64(x & 63)
         for w in range(lo >> 6, (N + 63) >> 6 if near else 0):  # neighbours after x, in order
             bits = np.uint64(0)
@@ -452,7 +366,7 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
                 )
                 lb[j, x >> 6] |= bit_x
                 f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
-                root = _join(parent, size, root, j)
+                root = join(parent, size, root, j)
         acc[b, x, 0], acc[b, x, 1] = f0, f1
         if three:
             acc[b, x, 2] = f2
@@ -468,8 +382,8 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
     three = len(dims) == 3
     N = q.shape[1]
     order = g.order[b]
-    _copy_slots(q, p, b, order, fw, iw, three)
-    cidx, cslot = iw[_CIDX], iw[_CSLOT]
+    copy_slots(q, p, b, order, fw, iw, three)
+    cidx, cslot = iw[CIDX], iw[CSLOT]
     nc = 0
     s = 0
     while s < N:  # slots s..end-1: the UAVs of one bucket (one UAV when folded)
@@ -480,10 +394,10 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
             for s2 in range(g.start[b, bk], g.start[b, bk + 1]):
                 cidx[n] = order[s2]
                 n += 1
-        _sort_indices(cidx, n, iw[_TMP], iw[_HIST], N)
+        sort_indices(cidx, n, iw[TMP], iw[HIST], N)
         for c in range(n):
-            cslot[c] = iw[_SLOT_OF, cidx[c]]
-        _gather(n, fw, iw, three)
+            cslot[c] = iw[SLOT_OF, cidx[c]]
+        gather(n, fw, iw, three)
         for s2 in range(s, end):
             x = order[s2]
             nc += _gather_uav(s2, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three)
@@ -501,7 +415,7 @@ def _flock_swarms(q, p, ql, pl, h, partner, prm, out, fw, fwu, iw, wm, lb, g, di
     """Every swarm: grid pass where ``g`` holds the swarm, all pairs otherwise. ``dims``:
     a tuple of ``dim`` entries, so that each dimension compiles its own kernels."""
     acc, min_d2, n_coll, lcc, bad, vmis, vmax = out
-    parent, size = iw[_PARENT], iw[_SIZE]
+    parent, size = iw[PARENT], iw[SIZE]
     n_unpaired = _count_unpaired(partner)
     for b in range(q.shape[0]):
         _velocity_mismatch(p, pl, partner, n_unpaired, b, vmis, vmax)
@@ -514,7 +428,7 @@ def _flock_swarms(q, p, ql, pl, h, partner, prm, out, fw, fwu, iw, wm, lb, g, di
             n_coll[b] = _sweep_pairs(q, p, partner, prm, b, *args)
         else:
             n_coll[b] = _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims)
-        lcc[b] = _largest_component(parent[: q.shape[1]], size)
+        lcc[b] = largest_component(parent[: q.shape[1]], size)
 
 
 # The entry points take arrays one by one: the dispatcher types plain arrays fastest, which
@@ -604,9 +518,9 @@ def flocking_runner(
             "diverged": np.empty(B, np.bool_),
             "velocity_mismatch": np.empty(B),
             "velocity_mismatch_max": np.empty(B),
-            # scratch: see _QS ... and _ORDER ... above
-            "_fw": np.zeros((_ROW + 1, 64 * words)),
-            "_iw": np.zeros((_HIST + 1, max(64 * words, 256)), np.int64),
+            # scratch: see pairflock_env.swarm.slots
+            "_fw": np.zeros((ROW + 1, 64 * words)),
+            "_iw": np.zeros((HIST + 1, max(64 * words, 256)), np.int64),
         }
         out["_fwu"] = out["_fw"].view(np.uint64)
         n_wm = N if grid is None and N <= _PAIRS_MAX else 0  # (the grid's fallback: rows)
