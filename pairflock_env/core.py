@@ -34,7 +34,8 @@ import numpy as np
 
 from pairflock_env.config import PairFlockConfig, make_config
 from pairflock_env.config.arrays import real_array
-from pairflock_env.dynamics import make_vehicle
+from pairflock_env.dynamics import ParticleModel, QuadrotorModel, make_vehicle
+from pairflock_env.kernels import jit_kernel
 from pairflock_env.safety import make_safety_stage
 from pairflock_env.seeding import swarm_generators
 from pairflock_env.swarm.grid import NeighborGrid
@@ -74,6 +75,14 @@ SeedLike = int | np.random.SeedSequence | None
 #: a diverging swarm overflows on its way out; the step checks its results itself (a swarm
 #: with non-finite values is flagged ``diverged``), so numpy's warnings would only be noise
 _CHECKED_FP = dict(over="ignore", invalid="ignore", divide="ignore")
+
+
+@jit_kernel
+def _tick(steps, t, dt):
+    """One control step more on every swarm's clock: t = steps dt."""
+    for b in range(steps.shape[0]):
+        steps[b] += 1
+        t[b] = steps[b] * dt
 
 
 def check_count(name: str, value: Any) -> None:
@@ -159,6 +168,11 @@ class PairFlockCore:
         #: extra fields: those fields are then filled on top of the agents' pass
         noisy = cfg.obs_noise_position > 0 or cfg.obs_noise_velocity > 0
         self._perceived = bool(cfg.partner_delay or noisy or cfg.obs_extra)
+        #: whether a step does no numpy arithmetic that could overflow (a diverging swarm's
+        #: overflow would only raise warnings, which the step masks otherwise)
+        numba_stages = type(self.vehicle) in (ParticleModel, QuadrotorModel)
+        numba_stages &= cfg.safety_filter == "none" and cfg.disturbance_std == 0
+        self._quiet = numba_stages and not (self._perceived or self._check_finite)
         self._rngs: list[np.random.Generator] = [
             g if g is not None else np.random.default_rng() for g in self._make_rngs(seed, B)
         ]
@@ -316,12 +330,17 @@ class PairFlockCore:
         grid = self.neighbor_grid  # of this state, from the last pass (None: all pairs)
         u = self.safety.apply(self.q, self.p, self._flock_out["acc"], u, grid)  # 2b. safety filter
         self.pair_command = u
+        if self._quiet:  # every stage below runs in numba: no floating-point flags to mask
+            return self._advance(u, clipped)
         with np.errstate(**_CHECKED_FP):
-            a_des = self._desired_acceleration(u)  # 3. flocking + pair term (+ disturbance)
-            self.vehicle.advance(self.q, self.p, a_des)  # 4. the vehicle model tracks a_des
-            self.steps += 1
-            np.multiply(self.steps, self.config.dt, out=self.t)  # no drift from repeated sums
-            return self._refresh(u, clipped)
+            return self._advance(u, clipped)
+
+    def _advance(self, u: np.ndarray, clipped: np.ndarray) -> StepResult:
+        """Stages 3-5 of a step, from the (filtered) pair command u."""
+        a_des = self._desired_acceleration(u)  # 3. flocking + pair term (+ disturbance)
+        self.vehicle.advance(self.q, self.p, a_des)  # 4. the vehicle model tracks a_des
+        _tick(self.steps, self.t, self.config.dt)  # t = steps dt: no drift from repeated sums
+        return self._refresh(u, clipped)
 
     def _desired_acceleration(self, u: np.ndarray) -> np.ndarray:
         """a_des (B, N, dim): the flocking command of the current state, plus the pair
@@ -361,7 +380,9 @@ class PairFlockCore:
         safety = self.safety.info(reset=reset_rows is not None)
         terms = {k: rows[f"reward_{k}"] for k in REWARD_TERMS}
         info = make_info(rows, fl, u, clipped, self.t, diverged, terms, safety, rows["pair_accel"])
-        if diverged.any():  # a diverged swarm keeps its last finite observation and infos
+        if np.count_nonzero(
+            diverged
+        ):  # a diverged swarm keeps its last finite observation and infos
             obs[diverged] = self._obs[diverged]
             hold_last_finite(info, self._info, diverged)
             reward[diverged] = -DIVERGENCE_PENALTY

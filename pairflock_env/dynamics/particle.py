@@ -29,11 +29,9 @@ class ParticleModel:
         pass
 
     def advance(self, q: np.ndarray, p: np.ndarray, a_des: np.ndarray) -> None:
-        if not (q.flags.c_contiguous and p.flags.c_contiguous and a_des.shape == q.shape):
+        if a_des.shape != q.shape:
             return self._advance_numpy(q, p, a_des)
-        _advance_kernel(
-            q.reshape(-1), p.reshape(-1), a_des.reshape(-1), self.h, self.substeps, self.exact
-        )
+        _advance_kernel(q, p, a_des, self.h, self.substeps, self.exact)
 
     def _advance_numpy(self, q: np.ndarray, p: np.ndarray, a_des: np.ndarray) -> None:
         h = self.h
@@ -54,17 +52,18 @@ class ParticleModel:
 @jit_kernel
 def _advance_kernel(q, p, a, h, substeps, exact):
     """:meth:`ParticleModel.advance` element by element (the same operations, in order)."""
-    if exact:
-        T = h * substeps
-        c = 0.5 * T * T
-        for e in range(q.shape[0]):
-            q[e] += p[e] * T + c * a[e]
-            p[e] += a[e] * T
-        return
-    for e in range(q.shape[0]):
-        dv = a[e] * h
-        pe, qe = p[e], q[e]
-        for _ in range(substeps):
-            pe += dv
-            qe += pe * h
-        p[e], q[e] = pe, qe
+    T = h * substeps
+    c = 0.5 * T * T
+    for b in range(q.shape[0]):
+        for i in range(q.shape[1]):
+            for k in range(q.shape[2]):
+                if exact:
+                    q[b, i, k] += p[b, i, k] * T + c * a[b, i, k]
+                    p[b, i, k] += a[b, i, k] * T
+                    continue
+                dv = a[b, i, k] * h
+                pe, qe = p[b, i, k], q[b, i, k]
+                for _ in range(substeps):
+                    pe += dv
+                    qe += pe * h
+                p[b, i, k], q[b, i, k] = pe, qe
