@@ -65,26 +65,30 @@ from pairflock_env.swarm.grid import (
     ring_bound2,
 )
 from pairflock_env.swarm.slots import (
+    ACC,
     CIDX,
     CP,
     CQ,
     CSLOT,
     HIST,
+    MD,
     NB,
     ORDER,
     PARENT,
     POS_OF,
+    PRT,
     PS,
     QS,
     ROW,
     SIZE,
-    SLOT_OF,
     TMP,
+    TMP2,
     copy_slots,
     find,
     gather,
     join,
     largest_component,
+    put_slots,
     row_d2,
     sort_indices,
 )
@@ -215,7 +219,7 @@ def _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2):
 
 
 @jit_inline
-def _gather_uav(s, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three):
+def _gather_uav(s, x, n, prm, fw, fwu, iw, three):
     """UAV x (in slot s) against the candidate list (indices in increasing order, every
     UAV within reach of x among them, x too): x's separation and flocking command, and
     its edges of the interaction graph; returns the collisions seen from x.
@@ -232,7 +236,7 @@ def _gather_uav(s, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three):
     v2 = fw[CP + 2, sx] if three else 0.0
     row_d2(fw, n, x0, x1, x2, three)
     row[sx] = np.inf  # itself: no neighbour, no separation, no collision
-    px = partner[x]
+    px = iw[PRT, s]
     inf_bits = float_bits(np.inf)
     m = inf_bits
     nc = 0
@@ -240,7 +244,7 @@ def _gather_uav(s, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three):
         v = rowu[c] if cidx[c] != px else inf_bits
         m = v if v < m else m
         nc += row[c] < prm.collision_distance2
-    min_d2[b, x] = bits_float(m)
+    fw[MD, s] = bits_float(m)
     k = 0
     for w in range((n + 63) >> 6):  # the neighbours, in increasing index
         bits = np.uint64(0)
@@ -251,7 +255,7 @@ def _gather_uav(s, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three):
             nb[k] = 64 * w + low_bit(bits)
             bits &= bits - np.uint64(1)
             k += 1
-    f0, f1, f2 = acc[b, x, 0], acc[b, x, 1], acc[b, x, 2] if three else 0.0
+    f0, f1, f2 = fw[ACC, s], fw[ACC + 1, s], fw[ACC + 2, s] if three else 0.0
     for t in range(k):
         c = nb[t]
         dq2 = fw[CQ + 2, c] - x2 if three else 0.0
@@ -259,9 +263,7 @@ def _gather_uav(s, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three):
         dq0, dq1 = fw[CQ, c] - x0, fw[CQ + 1, c] - x1
         g = _pair_force(prm, row[c], dq0, dq1, dq2, fw[CP, c] - v0, fw[CP + 1, c] - v1, dp2)[0]
         f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
-    acc[b, x, 0], acc[b, x, 1] = f0, f1
-    if three:
-        acc[b, x, 2] = f2
+    fw[ACC, s], fw[ACC + 1, s], fw[ACC + 2, s] = f0, f1, f2
     parent, size = iw[PARENT], iw[SIZE]
     # the interaction graph (over slots), each edge once: from x to the neighbours of
     # larger index, which follow x in the candidate list
@@ -281,11 +283,12 @@ def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
     N = q.shape[1]
     for i in range(N):  # slots, and the candidate list, in index order
         iw[ORDER, i] = iw[CIDX, i] = iw[CSLOT, i] = i
-    copy_slots(q, p, b, iw[ORDER], fw, iw, three)
+    copy_slots(q, p, b, iw[ORDER], partner, acc, fw, iw, three)
     gather(N, fw, iw, three)
     nc = 0
     for x in range(N):
-        nc += _gather_uav(x, x, N, partner, prm, b, acc, min_d2, fw, fwu, iw, three)
+        nc += _gather_uav(x, x, N, prm, fw, fwu, iw, three)
+    put_slots(b, iw[ORDER], acc, min_d2, fw, three)
     return nc // 2  # each pair was seen from both sides
 
 
@@ -382,26 +385,36 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
     three = len(dims) == 3
     N = q.shape[1]
     order = g.order[b]
-    copy_slots(q, p, b, order, fw, iw, three)
+    copy_slots(q, p, b, order, partner, acc, fw, iw, three)
     cidx, cslot = iw[CIDX], iw[CSLOT]
     nc = 0
     s = 0
+    padded = g.n_ring[b] > 0
+    bucket = -1
     while s < N:  # slots s..end-1: the UAVs of one bucket (one UAV when folded)
-        end = g.start[b, g.bucket[b, order[s]] + 1] if g.n_ring[b] > 0 else s + 1
+        if padded:  # the next occupied bucket, and its one-ring
+            bucket += 1
+            while g.start[b, bucket + 1] == s:
+                bucket += 1
+            end = g.start[b, bucket + 1]
+            n_bk = g.n_ring[b]
+            for t in range(n_bk):
+                g.buckets[t] = bucket + g.ring[b, t]
+        else:
+            end = s + 1
+            n_bk = one_ring(q, b, order[s], g, g.buckets)
         n = 0
-        for t in range(one_ring(q, b, order[s], g, g.buckets)):
+        for t in range(n_bk):
             bk = g.buckets[t]
             for s2 in range(g.start[b, bk], g.start[b, bk + 1]):
-                cidx[n] = order[s2]
+                cidx[n], cslot[n] = order[s2], s2
                 n += 1
-        sort_indices(cidx, n, iw[TMP], iw[HIST], N)
-        for c in range(n):
-            cslot[c] = iw[SLOT_OF, cidx[c]]
+        sort_indices(cidx, cslot, n, iw[TMP], iw[TMP2], iw[HIST], N)
         gather(n, fw, iw, three)
         for s2 in range(s, end):
-            x = order[s2]
-            nc += _gather_uav(s2, x, n, partner, prm, b, acc, min_d2, fw, fwu, iw, three)
+            nc += _gather_uav(s2, order[s2], n, prm, fw, fwu, iw, three)
         s = end
+    put_slots(b, order, acc, min_d2, fw, three)
     # the one-ring proves separations shorter than a cell; the others need a wider search
     bound = ring_bound2(g, 1)
     for i in range(N):
@@ -519,8 +532,8 @@ def flocking_runner(
             "velocity_mismatch": np.empty(B),
             "velocity_mismatch_max": np.empty(B),
             # scratch: see pairflock_env.swarm.slots
-            "_fw": np.zeros((ROW + 1, 64 * words)),
-            "_iw": np.zeros((HIST + 1, max(64 * words, 256)), np.int64),
+            "_fw": np.zeros((MD + 1, 64 * words)),
+            "_iw": np.zeros((HIST + 1, max(64 * words, 256)), np.int64),  # HIST: the last
         }
         out["_fwu"] = out["_fw"].view(np.uint64)
         n_wm = N if grid is None and N <= _PAIRS_MAX else 0  # (the grid's fallback: rows)
