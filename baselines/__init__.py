@@ -1,4 +1,4 @@
-"""Pair controllers for the pairflock action slot, and the paper's reproduction.
+"""Pair controllers for the pairflock action slot, and the experiments that use them.
 
     >>> from baselines import make_pair_policy
     >>> policy = make_pair_policy("smc", env)          # eq. 28
@@ -8,24 +8,26 @@ Names: ``"smc"`` (sliding mode, eq. 28), ``"proportional"`` (eq. 44), ``"zero"``
 only), ``"sb3:<path>"`` (a model trained with ``python -m train``). Gains are keyword
 arguments (``make_pair_policy("smc", env, k=200)``).
 
-The package has four layers, each importing only the ones before it:
+The package has five layers, each importing only the ones before it:
 
+* :mod:`baselines.runtime` - files, run records, thread pinning, processes, the CLI error path;
 * :mod:`baselines.controllers` - the controllers and their registry (re-exported here);
-* :mod:`baselines.evaluation` - batched rollouts, jobs and their backends, CLI specs, files;
-* :mod:`baselines.reporting` - tables, acceptance criteria, figures, video;
-* :mod:`baselines.experiments` - the CLIs (``python -m baselines.benchmark``, ``reproduce``,
-  ``quadrotor_experiment``, ``quadrotor_invariants``).
+* :mod:`baselines.evaluation` - batched rollouts, jobs and their backends, CLI specs;
+* :mod:`baselines.reporting` - tables, statistics, acceptance criteria, figures, video;
+* :mod:`baselines.experiments` - one folder per experiment (``benchmark``, ``quadrotor``,
+  ``safety``), each with its command lines.
 
-The controller names are loaded on first use, so that importing a submodule (e.g. the
-thread pinning of :mod:`baselines.evaluation.parallel`) does not load numpy first.
+The modules beside this one are the launchers of the documented commands (``python -m
+baselines.benchmark``, ``reproduce``, ``quadrotor_experiment``, ``quadrotor_invariants``,
+``quadrotor_compare``, ``safety_compare``): each pins one thread per process, then imports
+its experiment. So that the pinning comes before numpy loads, this package imports nothing
+itself: the controllers' names below are looked up on first use.
 """
 
 from __future__ import annotations
 
 import importlib
 from typing import TYPE_CHECKING, Any
-
-from baselines._moved import install_aliases
 
 if TYPE_CHECKING:  # the names as static tools (type checkers, the API docs) see them
     from baselines.controllers import (
@@ -49,8 +51,6 @@ __all__ = [
     "make_pair_policy",
     "resolve_env",
 ]
-
-install_aliases()
 
 
 def __getattr__(name: str) -> Any:

@@ -1,18 +1,20 @@
-"""``python -m baselines.quadrotor_compare`` (the documented command).
-
-Runs :mod:`baselines.experiments.quadrotor_compare`.
-"""
+"""``python -m baselines.quadrotor_compare`` / ``pairflock-quadrotor-compare``:
+two quadrotor-experiment runs compared seed by seed
+(:mod:`baselines.experiments.quadrotor.compare`), on one thread per process."""
 
 import sys
+from collections.abc import Sequence
 
-from baselines.experiments import quadrotor_compare as _impl
-
-__all__ = list(_impl.__all__)
+from baselines.runtime.threads import pin_threads
 
 
-def __getattr__(name: str):
-    return getattr(_impl, name)
+def main(argv: Sequence[str] | None = None) -> int:
+    """Pin the threads, then run the command; returns the exit status."""
+    pin_threads()  # before numpy loads
+    from baselines.experiments.quadrotor.compare import main as run
+
+    return run(argv)
 
 
 if __name__ == "__main__":
-    sys.exit(_impl.main())
+    sys.exit(main())

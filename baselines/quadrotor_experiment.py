@@ -1,18 +1,20 @@
-"""``python -m baselines.quadrotor_experiment`` (the documented command).
-
-Runs :mod:`baselines.experiments.quadrotor_experiment`, and gives its names (the old import path).
-"""
+"""``python -m baselines.quadrotor_experiment`` / ``pairflock-quadrotor``:
+the Sec. VI-B quadrotor experiment
+(:mod:`baselines.experiments.quadrotor.experiment`), on one thread per process."""
 
 import sys
+from collections.abc import Sequence
 
-from baselines.experiments import quadrotor_experiment as _impl
-
-__all__ = list(_impl.__all__)
+from baselines.runtime.threads import pin_threads
 
 
-def __getattr__(name: str):
-    return getattr(_impl, name)
+def main(argv: Sequence[str] | None = None) -> int:
+    """Pin the threads, then run the command; returns the exit status."""
+    pin_threads()  # before numpy loads
+    from baselines.experiments.quadrotor.experiment import main as run
+
+    return run(argv)
 
 
 if __name__ == "__main__":
-    sys.exit(_impl.main())
+    sys.exit(main())

@@ -1,18 +1,20 @@
-"""``python -m baselines.quadrotor_invariants`` (the documented command).
-
-Runs :mod:`baselines.experiments.quadrotor_invariants`, and gives its names (the old import path).
-"""
+"""``python -m baselines.quadrotor_invariants`` / ``pairflock-quadrotor-invariants``:
+the quadrotor model's physics invariants
+(:mod:`baselines.experiments.quadrotor.invariants`), on one thread per process."""
 
 import sys
+from collections.abc import Sequence
 
-from baselines.experiments import quadrotor_invariants as _impl
-
-__all__ = list(_impl.__all__)
+from baselines.runtime.threads import pin_threads
 
 
-def __getattr__(name: str):
-    return getattr(_impl, name)
+def main(argv: Sequence[str] | None = None) -> int:
+    """Pin the threads, then run the command; returns the exit status."""
+    pin_threads()  # before numpy loads
+    from baselines.experiments.quadrotor.invariants import main as run
+
+    return run(argv)
 
 
 if __name__ == "__main__":
-    sys.exit(_impl.main())
+    sys.exit(main())

@@ -17,11 +17,12 @@ Everything runs on one thread (numba kernels are single-threaded; OMP/MKL pinned
 
 from __future__ import annotations
 
-from baselines.evaluation.parallel import pin_threads
+from baselines.runtime.threads import pin_threads
 
 pin_threads()  # one thread for OpenMP/MKL/OpenBLAS/numba, before numpy loads
 
 import argparse  # noqa: E402
+import dataclasses  # noqa: E402
 import os  # noqa: E402
 import platform  # noqa: E402
 import statistics  # noqa: E402
@@ -30,9 +31,12 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 from _timing import median_rate, print_breakdown  # noqa: E402
 
+from baselines.runtime.cli import ArgumentParser, at_least  # noqa: E402
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
 from pairflock_env.swarm.flocking import flocking_params, flocking_pass  # noqa: E402
+from pairflock_env.swarm.grid import NeighborGrid  # noqa: E402
 from pairflock_env.swarm.pair_pass import pair_pass  # noqa: E402
+from pairflock_env.swarm.spacing import place  # noqa: E402
 
 SECTIONS = ("core", "pettingzoo", "breakdown", "kernels", "large", "threshold")
 _CLOCK = {"clock": time.perf_counter}  # --cpu-time switches to time.process_time
@@ -72,15 +76,16 @@ def breakdown(N: int, B: int, repeats: int, search: str | None = None) -> dict[s
     core = PairFlockCore(cfg, num_swarms=B)
     core.reset(seed=0)
     lq, lp = core.leader_state()
+    params = flocking_params(cfg)
     fl_out, pp_out = {}, {}
-    grid = getattr(core, "neighbor_grid", None)
+    grid = core.neighbor_grid
 
     def build():
         grid.build(core.q)
 
     def flock():
         args = (core.q, core.p, lq, lp, core.pinned, core.partner_of)
-        fl_out.update(flocking_pass(core._params, *args, out=fl_out or None, grid=grid))
+        fl_out.update(flocking_pass(params, *args, out=fl_out or None, grid=grid))
 
     def pairs():
         args = (core.q, core.p, core.agent_uavs, core.partner_uavs, cfg.radius)
@@ -116,10 +121,6 @@ def kernel_state(kind: str, N: int, B: int, seed: int = 0):
     neighbours. ``"flock"``: a hexagonal lattice at the spacing d = 7 m jittered by 0.3 m, the
     alpha-lattice the protocol converges to (about 6 neighbours each).
     """
-    # imported here, so that the other sections also run against checkouts older than the
-    # grid (before/after comparisons)
-    from pairflock_env.swarm.spacing import place
-
     rng = np.random.default_rng(seed)
     qs = []
     for _ in range(B):
@@ -137,8 +138,6 @@ def kernel_state(kind: str, N: int, B: int, seed: int = 0):
 
 def bench_kernels(kind: str, N: int, B: int, grid: bool, repeats: int, min_time: float) -> float:
     """UAV-steps/s of the neighbour kernels of one step (all pairs, or grid build + passes)."""
-    from pairflock_env.swarm.grid import NeighborGrid
-
     cfg = make_config("paper", n_uavs=N)
     prm = flocking_params(cfg)
     q, p = kernel_state(kind, N, B)
@@ -159,24 +158,50 @@ def bench_kernels(kind: str, N: int, B: int, grid: bool, repeats: int, min_time:
     return rate(step, B * N, repeats, min_time)
 
 
-def kernel_tables(repeats: int, min_time: float) -> None:
-    sizes = [(100, 1), (300, 1), (1000, 1), (3000, 1), (10000, 1), (1000, 16), (50, 256)]
-    sizes += [(100, 256)]
+@dataclasses.dataclass(frozen=True)
+class Sizes:
+    """The swarm sizes (N, B) of the sections; :data:`SMOKE` runs every section tiny."""
+
+    kernels: tuple[tuple[int, int], ...] = (
+        (100, 1), (300, 1), (1000, 1), (3000, 1), (10000, 1), (1000, 16), (50, 256), (100, 256),
+    )  # fmt: skip
+    large: tuple[tuple[int, int], ...] = ((300, 1), (1000, 1), (3000, 1), (10000, 1), (1000, 16))
+    #: per-UAV cost compared between these two (B = 1)
+    small_big: tuple[int, int] = (300, 10000)
+    auto: tuple[int, int] = (100, 256)  # auto vs all pairs, alternated
+    threshold_n: tuple[int, ...] = (100, 150, 200, 250, 300, 500)
+    threshold_b: tuple[int, ...] = (1, 64)
+    breakdown: tuple[tuple[int, int], ...] = ((100, 256), (100, 1))
+
+
+FULL = Sizes()
+SMOKE = Sizes(
+    kernels=((8, 1), (12, 1)),
+    large=((8, 1), (12, 1)),
+    small_big=(8, 12),
+    auto=(8, 2),
+    threshold_n=(8,),
+    threshold_b=(1,),
+    breakdown=((8, 1),),
+)
+
+
+def kernel_tables(repeats: int, min_time: float, sizes: Sizes = FULL) -> None:
+    small, big = sizes.small_big
     for kind in ("start", "flock"):
         print(
             f"\n## Neighbour kernels alone, {kind} state: UAV-steps/s (median)\n\n"
             "| N | B | all pairs | grid | grid / all pairs |\n|---|---|---|---|---|"
         )
         rates = {}
-        for N, B in sizes:
+        for N, B in sizes.kernels:
             a = bench_kernels(kind, N, B, False, repeats, min_time)
             g = rates[N, B] = bench_kernels(kind, N, B, True, repeats, min_time)
             print(f"| {N:,} | {B} | {a:,.0f} | {g:,.0f} | {g / a:.1f}x |")
-        ratio = rates[300, 1] / rates[10000, 1]
-        print(f"\nGrid: per-UAV cost at N = 10,000 / at N = 300 (B = 1): {ratio:.2f}")
+        ratio = rates[small, 1] / rates[big, 1]
+        print(f"\nGrid: per-UAV cost at N = {big:,} / at N = {small} (B = 1): {ratio:.2f}")
 
 
-LARGE_SIZES = ((300, 1), (1000, 1), (3000, 1), (10000, 1), (1000, 16))
 #: the all-pairs core at N = 100, B = 256 before the grid was integrated (UAV-steps/s,
 #: bench_core.py --sections core at commit f107d5b, this machine)
 ALL_PAIRS_N100_B256 = 3_071_349
@@ -228,8 +253,9 @@ def pettingzoo_rollout(N: int, repeats: int, steps: int = ROLLOUT_STEPS) -> floa
     return statistics.median(rates[1:])
 
 
-def large_tables(repeats: int, min_time: float) -> None:
+def large_tables(repeats: int, min_time: float, sizes: Sizes = FULL) -> None:
     """The full core step of large swarms with both searches; ratios from this one run."""
+    small, big = sizes.small_big
     for kind in ("start", "flock"):
         print(
             f"\n## Core `PairFlockCore.step` of large swarms, {kind} state: UAV-steps/s "
@@ -237,27 +263,32 @@ def large_tables(repeats: int, min_time: float) -> None:
             "| N | B | all pairs | grid | grid / all pairs |\n|---|---|---|---|---|"
         )
         grid = {}
-        for N, B in LARGE_SIZES:
+        for N, B in sizes.large:
             slow = N * N * B > 2e7  # all pairs at N = 10,000: ~0.1 s a step, one rollout
             a = bench_rollout(N, B, "all_pairs", kind, 1 if slow else repeats)
             g = grid[N, B] = bench_rollout(N, B, "grid", kind, repeats)
             print(f"| {N:,} | {B} | {a:,.0f} | {g:,.0f} | {g / a:.1f}x |")
-        ratio = grid[300, 1] / grid[10000, 1]
-        print(f"\nGrid, {kind} state: per-UAV cost at N = 10,000 / at N = 300 (B = 1): {ratio:.2f}")
+        ratio = grid[small, 1] / grid[big, 1]
+        print(
+            f"\nGrid, {kind} state: per-UAV cost at N = {big:,} / at N = {small} (B = 1): "
+            f"{ratio:.2f}"
+        )
     # the same code path (auto is all pairs at N = 100): alternate them, so that a change of
     # load on a shared machine hits both alike
-    runs = [bench_core(100, 256, repeats, min_time, s) for s in ("auto", "all_pairs") * 3]
+    N, B = sizes.auto
+    runs = [bench_core(N, B, repeats, min_time, s) for s in ("auto", "all_pairs") * 3]
     auto, pairs = statistics.median(runs[0::2]), statistics.median(runs[1::2])
     print(
-        f"\nN = 100, B = 256: auto {auto:,.0f}, all pairs {pairs:,.0f} UAV-steps/s "
-        f"(all pairs before the grid: {ALL_PAIRS_N100_B256:,})"
+        f"\nN = {N}, B = {B}: auto {auto:,.0f}, all pairs {pairs:,.0f} UAV-steps/s "
+        f"(all pairs before the grid, N = 100, B = 256: {ALL_PAIRS_N100_B256:,})"
     )
-    r = pettingzoo_rollout(10000, repeats)
-    print(f"PettingZoo step() at N = 10,000: {r:,.1f} steps/s ({r * 1e4:,.0f} UAV-steps/s)")
-    print_breakdown("Where the time goes: N = 10,000, B = 1, grid", breakdown(10000, 1, repeats))
+    r = pettingzoo_rollout(big, repeats)
+    print(f"PettingZoo step() at N = {big:,}: {r:,.1f} steps/s ({r * big:,.0f} UAV-steps/s)")
+    title = f"Where the time goes: N = {big:,}, B = 1, grid"
+    print_breakdown(title, breakdown(big, 1, repeats))
 
 
-def threshold_table(repeats: int, min_time: float) -> None:
+def threshold_table(repeats: int, min_time: float, sizes: Sizes = FULL) -> None:
     """Core step with each search around the crossover (B = 1 and B = 64, start and flock
     states): where "auto" switches to the grid."""
     print(
@@ -265,24 +296,25 @@ def threshold_table(repeats: int, min_time: float) -> None:
         f"{ROLLOUT_STEPS} steps)\n\n"
         "| N | B | state | all pairs | grid | grid / all pairs |\n|---|---|---|---|---|---|"
     )
-    for N in (100, 150, 200, 250, 300, 500):
-        for B in (1, 64):
+    for N in sizes.threshold_n:
+        for B in sizes.threshold_b:
             for kind in ("start", "flock"):
                 a = bench_rollout(N, B, "all_pairs", kind, repeats)
                 g = bench_rollout(N, B, "grid", kind, repeats)
                 print(f"| {N} | {B} | {kind} | {a:,.0f} | {g:,.0f} | {g / a:.2f}x |")
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(
+def build_parser() -> argparse.ArgumentParser:
+    """The command line of ``python benchmarks/bench_core.py``."""
+    ap = ArgumentParser(
         prog="python benchmarks/bench_core.py",
         description=__doc__.split("\n\n")[0] + " Prints medians over repeats.",
     )
     ap.add_argument(
         "--quick", action="store_true", help="3 repeats of >= 0.2 s instead of 7 x 0.5 s"
     )
-    ap.add_argument("--n-uavs", type=int, nargs="+", default=[20, 50, 100])
-    ap.add_argument("--batch", type=int, nargs="+", default=[1, 64, 256])
+    ap.add_argument("--n-uavs", type=at_least(2), nargs="+", default=[20, 50, 100])
+    ap.add_argument("--batch", type=at_least(1), nargs="+", default=[1, 64, 256])
     ap.add_argument(
         "--sections",
         nargs="+",
@@ -295,22 +327,30 @@ def main(argv=None) -> int:
         action="store_true",
         help="time with this process's CPU time instead of wall time (steadier when shared)",
     )
-    args = ap.parse_args(argv)
-    repeats, min_time = (3, 0.2) if args.quick else (7, 0.5)
-    _CLOCK["clock"] = time.process_time if args.cpu_time else time.perf_counter
+    ap.add_argument(
+        "--smoke",
+        action="store_true",
+        help="every section once, tiny (N <= 12): checks the script, measures nothing",
+    )
+    return ap
 
+
+def main(argv=None) -> int:
+    """Run the sections asked for and print their tables; returns the exit status."""
+    args = build_parser().parse_args(argv)
+    repeats, min_time = (3, 0.2) if args.quick else (7, 0.5)
+    sizes = FULL
+    if args.smoke:
+        repeats, min_time, sizes = 1, 0.0, SMOKE
+        args.n_uavs, args.batch, args.sections = [8], [1], list(SECTIONS)
+    _CLOCK["clock"] = time.process_time if args.cpu_time else time.perf_counter
     print(
         f"# pairflock_env core speed ({platform.processor() or platform.machine()}, "
         f"{os.cpu_count()} cores visible, 1 thread used, "
         f"{'CPU' if args.cpu_time else 'wall'} time)\n"
     )
     if "core" in args.sections:
-        print("## Core `PairFlockCore.step`: UAV-steps/s (median)\n")
-        print("| N \\ B | " + " | ".join(str(b) for b in args.batch) + " |")
-        print("|---|" + "---|" * len(args.batch))
-        for N in args.n_uavs:
-            cells = [f"{bench_core(N, B, repeats, min_time):,.0f}" for B in args.batch]
-            print(f"| {N} | " + " | ".join(cells) + " |")
+        core_table(args.n_uavs, args.batch, repeats, min_time)
     if "pettingzoo" in args.sections:
         print("\n## PettingZoo `parallel_env.step()` at B = 1: env steps/s (median)\n")
         print("| N | steps/s | UAV-steps/s |\n|---|---|---|")
@@ -318,15 +358,25 @@ def main(argv=None) -> int:
             r = bench_pettingzoo(N, repeats, min_time)
             print(f"| {N} | {r:,.0f} | {r * N:,.0f} |")
     if "breakdown" in args.sections:
-        for N, B in ((100, 256), (100, 1)):
+        for N, B in sizes.breakdown:
             print_breakdown(f"Where the time goes: N = {N}, B = {B}", breakdown(N, B, repeats))
     if "kernels" in args.sections:
-        kernel_tables(repeats, min_time)
+        kernel_tables(repeats, min_time, sizes)
     if "threshold" in args.sections:
-        threshold_table(repeats, min_time)
+        threshold_table(repeats, min_time, sizes)
     if "large" in args.sections:
-        large_tables(repeats, min_time)
+        large_tables(repeats, min_time, sizes)
     return 0
+
+
+def core_table(sizes_n, sizes_b, repeats: int, min_time: float) -> None:
+    """UAV-steps/s of ``PairFlockCore.step`` for every N (rows) and B (columns)."""
+    print("## Core `PairFlockCore.step`: UAV-steps/s (median)\n")
+    print("| N \\ B | " + " | ".join(str(b) for b in sizes_b) + " |")
+    print("|---|" + "---|" * len(sizes_b))
+    for N in sizes_n:
+        cells = [f"{bench_core(N, B, repeats, min_time):,.0f}" for B in sizes_b]
+        print(f"| {N} | " + " | ".join(cells) + " |")
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@ physics) through the public PettingZoo API at B = 1 and through the batched core
     python benchmarks/bench_quadrotor.py            # 7 repeats of >= 0.5 s per figure
     python benchmarks/bench_quadrotor.py --quick    # 3 repeats of >= 0.2 s
     python benchmarks/bench_quadrotor.py --large    # 1,000 quadrotors: real-time factor
+    python benchmarks/bench_quadrotor.py --smoke    # every part once, tiny (checks the script)
 
 Reports simulated seconds per wall second (B = 1; targets >= 20, i.e. 20 x real time) and
 swarm-seconds per wall second (B swarms x simulated seconds; target >= 300 at B = 64), as
@@ -14,7 +15,7 @@ numpy is imported (nothing here imports torch).
 
 from __future__ import annotations
 
-from baselines.evaluation.parallel import pin_threads
+from baselines.runtime.threads import pin_threads
 
 pin_threads()  # one thread for OpenMP/MKL/OpenBLAS/numba, before numpy loads
 
@@ -27,10 +28,13 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 from _timing import median_rate, print_breakdown  # noqa: E402
 
+from baselines import make_pair_policy  # noqa: E402
+from baselines.runtime.cli import ArgumentParser, at_least  # noqa: E402
 from pairflock_env import PairFlockCore, make_config, parallel_env  # noqa: E402
 from pairflock_env.dynamics.quadrotor import QuadrotorModel  # noqa: E402
-from pairflock_env.swarm.flocking import flocking_pass  # noqa: E402
+from pairflock_env.swarm.flocking import flocking_params, flocking_pass  # noqa: E402
 from pairflock_env.swarm.pair_pass import pair_pass  # noqa: E402
+from pairflock_env.swarm.passes import NeighborPass  # noqa: E402
 
 PRESET = "paper-quadrotor"
 TARGET_B1 = 20.0  # simulated s per wall s at B = 1 through PettingZoo
@@ -45,8 +49,6 @@ def _config(**overrides):
 def bench_pettingzoo(repeats: int, min_time: float, with_policy: bool) -> float:
     """Simulated seconds per wall second of ``parallel_env.step`` (optionally with the
     sliding-mode controller's ``predict`` for both agents in the loop)."""
-    from baselines import make_pair_policy
-
     env = parallel_env(preset=PRESET, max_cycles=10**9)
     obs, _ = env.reset(seed=0)
     dt = env.config.dt
@@ -131,12 +133,13 @@ def large_breakdown(N: int, repeats: int, min_time: float, clock) -> dict[str, f
             core.step(acts)
         steps.append((clock() - t0) / 20)
     core.reset(seed=0)
+    npass = NeighborPass(cfg, 1)
     parts = {"total core.step": 1e6 * statistics.median(steps[1:])}
     parts["quadrotor: substeps of controller + mixer + motors + rigid body (numba)"] = us(
         lambda: core.vehicle.advance(q.copy(), p.copy(), a_des)
     )
     parts["neighbour pass: grid build, flocking and pair passs (numba)"] = us(
-        lambda: core._neighbors.run(core.q, core.p, lq, lp, core.pinned)
+        lambda: npass.run(core.q, core.p, lq, lp, core.pinned)
     )
     parts["rest: checks, observations, rewards, infos (numpy)"] = max(
         0.0, parts["total core.step"] - sum(v for k, v in parts.items() if k != "total core.step")
@@ -157,48 +160,36 @@ def large_report(sizes, repeats: int, min_time: float, cpu_time: bool) -> None:
         print_breakdown(f"Where the time goes: {N:,} quadrotors, B = 1", parts)
 
 
+def _pass_timers(core: PairFlockCore, cfg) -> tuple:
+    """The flocking pass and the pair pass of ``core``'s state, as zero-argument functions."""
+    lq, lp = core.leader_state()
+    params = flocking_params(cfg)
+    fl_out, pp_out = {}, {}
+
+    def flock():
+        args = (core.q, core.p, lq, lp, core.pinned, core.partner_of)
+        fl_out.update(flocking_pass(params, *args, out=fl_out or None))
+
+    def pairs():
+        args = (core.q, core.p, core.agent_uavs, core.partner_uavs, cfg.radius)
+        pp_out.update(pair_pass(*args, cfg.obs_neighbors, out=pp_out or None))
+
+    return flock, pairs
+
+
 def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
     """Microseconds per control step in each part of one step (B swarms); at B = 1 also the
     PettingZoo layer on top of the core."""
     cfg = _config()
     core = PairFlockCore(cfg, num_swarms=B)
     core.reset(seed=0)
-    M = core.n_agents
-    actions = np.zeros((B, M, 3))
-    lq, lp = core.leader_state()
-    fl_out, pp_out = {}, {}
+    actions = np.zeros((B, core.n_agents, 3))
     q, p = core.q.copy(), core.p.copy()
     a_des = core.flock_accel.copy()
+    flock, pairs = _pass_timers(core, cfg)
 
     def us(fn):
         return 1e6 / median_rate(fn, 1.0, repeats, min_time)
-
-    def flock():
-        fl_out.update(
-            flocking_pass(
-                core._params,
-                core.q,
-                core.p,
-                lq,
-                lp,
-                core.pinned,
-                core.partner_of,
-                out=fl_out or None,
-            )
-        )
-
-    def pairs():
-        pp_out.update(
-            pair_pass(
-                core.q,
-                core.p,
-                core.agent_uavs,
-                core.partner_uavs,
-                cfg.radius,
-                cfg.obs_neighbors,
-                out=pp_out or None,
-            )
-        )
 
     parts = {"total core.step": us(lambda: core.step(actions))}
     if B == 1:
@@ -222,8 +213,9 @@ def breakdown(B: int, repeats: int, min_time: float) -> dict[str, float]:
     return parts
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(
+def build_parser() -> argparse.ArgumentParser:
+    """The command line of ``python benchmarks/bench_quadrotor.py``."""
+    ap = ArgumentParser(
         prog="python benchmarks/bench_quadrotor.py",
         description=__doc__.split("\n\n")[0] + " Prints medians over repeats.",
     )
@@ -232,14 +224,14 @@ def main(argv=None) -> int:
     )
     ap.add_argument(
         "--batch",
-        type=int,
+        type=at_least(1),
         nargs="+",
         default=[1, 16, 64, 256],
         help="numbers of swarms B for the core table",
     )
     ap.add_argument(
         "--large",
-        type=int,
+        type=at_least(2),
         nargs="*",
         metavar="N",
         help="only the real-time factor of N quadrotors (default N = 1,000) at B = 1",
@@ -249,13 +241,25 @@ def main(argv=None) -> int:
         action="store_true",
         help="with --large: per CPU second of this process (steadier on a shared machine)",
     )
-    args = ap.parse_args(argv)
+    ap.add_argument(
+        "--smoke",
+        action="store_true",
+        help="every part once, tiny (B = 1, 12 quadrotors for --large): checks the script",
+    )
+    return ap
+
+
+def main(argv=None) -> int:
+    """Print the tables (or ``--large``'s); returns the exit status."""
+    args = build_parser().parse_args(argv)
     repeats, min_time = (3, 0.2) if args.quick else (7, 0.5)
-    cfg = _config()
-    if args.large is not None:
+    if args.smoke:
+        repeats, min_time, args.batch = 1, 0.0, [1]
+        large_report([12], repeats, min_time, args.cpu_time)
+    elif args.large is not None:
         large_report(args.large or [1000], repeats, min_time, args.cpu_time)
         return 0
-
+    cfg = _config()
     print(
         f"# pairflock_env quadrotor speed ({platform.processor() or platform.machine()}, "
         f"{os.cpu_count()} cores visible, 1 thread used)\n"
@@ -264,6 +268,17 @@ def main(argv=None) -> int:
         f"Preset `{PRESET}`: N = {cfg.n_uavs}, protocol every {cfg.dt:g} s, physics every "
         f"{cfg.physics_dt:g} s ({1 / cfg.physics_dt:.0f} Hz, {cfg.substeps} substeps).\n"
     )
+    pettingzoo_table(repeats, min_time)
+    core_table(args.batch, repeats, min_time)
+    for B in (1,) if args.smoke else (1, 64):
+        print_breakdown(
+            f"Where the time goes, B = {B}", breakdown(B, repeats, min_time), "share of core.step"
+        )
+    return 0
+
+
+def pettingzoo_table(repeats: int, min_time: float) -> None:
+    """B = 1 through the PettingZoo API, with and without the controller, and the bare model."""
     print("## B = 1 through the PettingZoo API (simulated s per wall s, median)\n")
     print("| loop | x real time | target |\n|---|---|---|")
     r_env = bench_pettingzoo(repeats, min_time, with_policy=False)
@@ -273,22 +288,18 @@ def main(argv=None) -> int:
     print(f"| `env.step` + sliding-mode `predict` for both agents | {r_pol:.1f} | - |")
     bare = bench_bare_model(1, repeats, min_time)
     print(f"| quadrotor kernel alone (10 UAVs, no env) | {bare:.1f} | - |")
+
+
+def core_table(batches, repeats: int, min_time: float) -> None:
+    """The batched core, quadrotor and particle, for every B."""
     print("\n## Batched core `PairFlockCore.step` (swarm-seconds per wall s, median)\n")
     print("| B | quadrotor | particle (same scenario) |\n|---|---|---|")
-    for B in args.batch:
+    for B in batches:
         rq = bench_core(B, repeats, min_time)
         rp = bench_core(B, repeats, min_time, dynamics="particle")
-        mark = (
-            f" (target >= {TARGET_B64:g}: {'met' if rq >= TARGET_B64 else 'NOT met'})"
-            if B == 64
-            else ""
-        )
+        met = "met" if rq >= TARGET_B64 else "NOT met"
+        mark = f" (target >= {TARGET_B64:g}: {met})" if B == 64 else ""
         print(f"| {B} | {rq:,.0f}{mark} | {rp:,.0f} |")
-    for B in (1, 64):
-        print_breakdown(
-            f"Where the time goes, B = {B}", breakdown(B, repeats, min_time), "share of core.step"
-        )
-    return 0
 
 
 if __name__ == "__main__":

@@ -36,6 +36,7 @@ step, over all steps and over the steps where some agent's filter was active.
 ``--vecenv`` measures what training sees: the SB3 VecEnv of the learned pair policy's task
 (pair interface, N = 20, 32 swarms, ``pair_accel_limit=50``, ``obs_neighbors=12``) under
 random actions, filter off and on alternately, in agent-steps per CPU second (medians).
+``--smoke`` runs every part once, tiny (a check of the script, not a measurement).
 
 Filter and core batches are timed alternately (calibrated batch sizes, one thread); the
 table gives the medians and the median of the per-repeat ratio, the figure to read on a
@@ -46,22 +47,22 @@ computed; the commands are the same bit for bit): what the skip saves.
 
 from __future__ import annotations
 
-import os
+from baselines.runtime.threads import pin_threads
 
-os.environ.setdefault("OMP_NUM_THREADS", "1")
-os.environ.setdefault("MKL_NUM_THREADS", "1")
-os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+pin_threads()  # one thread for OpenMP/MKL/OpenBLAS/numba, before numpy loads
 
-import argparse
-import statistics
-import time
+import argparse  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
 
-import numpy as np
+import numpy as np  # noqa: E402
 
-from baselines.controllers.sliding_mode import SlidingModeController
-from pairflock_env import PairFlockCore, make_config
-from pairflock_env.safety import SafetyFilter, SafetyParams
-from pairflock_env.safety.cbf.kernels import BARRIER
+from baselines.controllers.sliding_mode import SlidingModeController  # noqa: E402
+from baselines.runtime.cli import ArgumentParser, at_least  # noqa: E402
+from pairflock_env import PairFlockCore, make_config  # noqa: E402
+from pairflock_env.envs.sb3 import PairFlockSB3VecEnv  # noqa: E402
+from pairflock_env.safety import SafetyFilter, SafetyParams  # noqa: E402
+from pairflock_env.safety.cbf.kernels import BARRIER  # noqa: E402
 
 
 def states(N: int, B: int, limit: float, params: dict):
@@ -92,10 +93,11 @@ def states(N: int, B: int, limit: float, params: dict):
     return cfg, core, filt, out
 
 
-def assumptions(N: int, seeds: int = 8, radius: float = 20.0) -> None:
+def assumptions(N: int, seeds: int = 8, radius: float = 20.0, steps: int | None = None) -> None:
     """Percentiles of the quantities behind the filter's assumptions (module docstring),
     for the UAVs within ``radius`` of a paired UAV (20 m: the filter's sensing radius when
-    docs/safety.md quoted them; the default is 100 m now)."""
+    docs/safety-results.md quoted them; the default is 100 m now), over the first ``steps`` control
+    steps (default: half an episode, 25 s)."""
     cfg = make_config("paper", n_uavs=N)
     core = PairFlockCore(cfg, num_swarms=seeds)
     res = core.reset(seed=list(range(seeds)))
@@ -103,7 +105,7 @@ def assumptions(N: int, seeds: int = 8, radius: float = 20.0) -> None:
     ia = core.agent_uavs
     unp = np.setdiff1d(np.arange(N), ia)
     rec: dict[str, list] = {"toward": [], "closing": [], "own": [], "partner": []}
-    for _ in range(cfg.episode_steps // 2):
+    for _ in range(cfg.episode_steps // 2 if steps is None else steps):
         q, p, acc = core.q, core.p, core.flock_accel
         for i in ia:
             x = q[:, i : i + 1] - q[:, unp]
@@ -239,11 +241,9 @@ def _step_table(rows, active, N, B, limit, steps, cfg, scan=False) -> None:
     print(f"\nsteps with an active filter: {int(active.sum())} of {len(rows)}")
 
 
-def vecenv(repeats: int = 5, steps: int = 200) -> None:
+def vecenv(repeats: int = 5, steps: int = 200, n_uavs: int = 20, num_swarms: int = 32) -> None:
     """Agent-steps per CPU second of the learning VecEnv, filter off vs on."""
-    from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
-
-    kw = dict(n_uavs=20, pair_accel_limit=50.0, obs_neighbors=12, num_swarms=32)
+    kw = dict(n_uavs=n_uavs, pair_accel_limit=50.0, obs_neighbors=12, num_swarms=num_swarms)
     settings = {
         "none": dict(safety_filter="none"),
         "cbf": dict(safety_filter="cbf"),  # the default 100 m sensing radius
@@ -288,17 +288,20 @@ def _ms(fn, n: int) -> float:
     return 1e3 * (time.perf_counter() - t0) / n
 
 
-def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--n", type=int, default=100, help="UAVs per swarm")
-    ap.add_argument("--b", type=int, default=256, help="swarms")
+def build_parser() -> argparse.ArgumentParser:
+    """The command line of ``python benchmarks/bench_safety.py``."""
+    ap = ArgumentParser(
+        prog="python benchmarks/bench_safety.py", description=__doc__.splitlines()[0]
+    )
+    ap.add_argument("--n", type=at_least(2), default=100, help="UAVs per swarm")
+    ap.add_argument("--b", type=at_least(1), default=256, help="swarms")
     ap.add_argument("--limit", type=float, default=50.0, help="pair_accel_limit, m/s^2")
     ap.add_argument("--quick", action="store_true", help="fewer repeats")
     ap.add_argument("--assumptions", action="store_true", help="print what the filter faces")
     ap.add_argument(
         "--in-step", action="store_true", help="time the stages of a filtered core.step"
     )
-    ap.add_argument("--steps", type=int, default=400, help="--in-step: control steps")
+    ap.add_argument("--steps", type=at_least(1), default=400, help="--in-step: control steps")
     ap.add_argument(
         "--radius",
         type=float,
@@ -319,33 +322,41 @@ def main(argv=None) -> None:
         help="--in-step: the filter scans all N UAVs per agent, not the core's grid",
     )
     ap.add_argument("--vecenv", action="store_true", help="SB3 VecEnv throughput off vs on")
-    args = ap.parse_args(argv)
-    if args.vecenv:
+    ap.add_argument(
+        "--smoke",
+        action="store_true",
+        help="every part once, tiny (N = 8, one swarm): checks the script, measures nothing",
+    )
+    return ap
+
+
+def main(argv=None) -> None:
+    """Run the part asked for (default: the filter against one core step)."""
+    args = build_parser().parse_args(argv)
+    if args.smoke:
+        filter_table(8, 1, args.limit, repeats=1, min_time=0.0)
+        in_step(8, 1, args.limit, 5, None, "paper", None, False)
+        assumptions(8, seeds=1, radius=1e4, steps=5)
+        vecenv(repeats=1, steps=5, n_uavs=8, num_swarms=1)
+    elif args.vecenv:
         vecenv()
-        return
-    if args.assumptions:
+    elif args.assumptions:
         assumptions(args.n)
-        return
-    if args.in_step:
+    elif args.in_step:
         in_step(
-            args.n,
-            args.b,
-            args.limit,
-            args.steps,
-            args.radius,
-            args.preset,
-            args.pairs,
-            args.scan,
+            args.n, args.b, args.limit, args.steps, args.radius, args.preset, args.pairs, args.scan
         )
-        return
-    repeats, min_time = (5, 0.1) if args.quick else (15, 0.3)
-    N, B = args.n, args.b
-    cfg, core, filt, cases = states(N, B, args.limit, {})
+    else:
+        repeats, min_time = (5, 0.1) if args.quick else (15, 0.3)
+        filter_table(args.n, args.b, args.limit, repeats, min_time)
+
+
+def filter_table(N: int, B: int, limit: float, repeats: int, min_time: float) -> None:
+    """The filter on the three states of :func:`states` against one core step, interleaved."""
+    cfg, core, filt, cases = states(N, B, limit, {})
     buf = filt.allocate(B, cfg.dim)
     full = SafetyFilter(filt.params, core.agent_uavs, N, core.partner_uavs)
-    full._pr[BARRIER.index.skip_far] = (
-        0.0  # the kernel's skip switch (_kernels._far): evaluate every UAV
-    )
+    full._pr[BARRIER.index.skip_far] = 0.0  # the kernel's far-UAV skip off: every UAV
     buf_full = full.allocate(B, cfg.dim)
     actions = np.zeros((B, core.n_agents, cfg.dim))
 
@@ -369,8 +380,7 @@ def main(argv=None) -> None:
         def apply_full(q=q, p=p, fa=fa, un=un):
             full.apply(q, p, fa, un, buf_full)
 
-        n_f = _calls(apply, min_time)
-        n_full = _calls(apply_full, min_time)
+        n_f, n_full = _calls(apply, min_time), _calls(apply_full, min_time)
         # interleaved, so that the medians see the same load of a shared machine
         runs = [
             (_ms(apply, n_f), _ms(apply_full, n_full), _ms(step, n_step)) for _ in range(repeats)

@@ -10,12 +10,16 @@ checkouts alternate ``--rounds`` times and the table gives the median over round
 round's median rate. Figures are view steps per second: one ``step()`` call of the view (the
 AEC env: one cycle, an action of every agent; ``interface="pair"``: one policy decision of
 ``decision_period`` control steps). Only the public API is used, so an older checkout can be
-measured with the same script.
+measured with the same script: the script imports only ``pairflock_env`` (of the checkout
+measured, first on the worker's path), the SB3 view when its case runs. ``--smoke`` runs every
+case once, tiny (a check of the script, not a measurement).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
+import inspect
 import json
 import os
 import statistics
@@ -25,6 +29,12 @@ import time
 import warnings
 from pathlib import Path
 
+import numpy as np
+from _timing import median_rate
+
+import pairflock_env as pf
+from pairflock_env import envs
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 CASES = ("parallel", "aec", "gym", "gym-pair", "vector-pair", "sb3-pair")
@@ -33,18 +43,12 @@ THREADS = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "NUMBA_
 
 def _with_interface(cls, name: str, **kw):
     """``cls(interface=name)``, or ``frame=name`` for checkouts older than that keyword."""
-    import inspect
-
     key = "interface" if "interface" in inspect.signature(cls).parameters else "frame"
     return cls(**{key: name}, **kw)
 
 
 def make_stepper(case: str, N: int):
     """A zero-argument function doing one view step of ``case`` (reset when episodes end)."""
-    import numpy as np
-
-    import pairflock_env as pf
-
     kw = {"preset": "paper", "n_uavs": N, "max_cycles": 10**9}
     if case in ("parallel", "aec"):
         env = pf.parallel_env(**kw) if case == "parallel" else pf.env(**kw)
@@ -60,23 +64,19 @@ def make_stepper(case: str, N: int):
 
         return cycle
     if case in ("gym", "gym-pair"):
-        from pairflock_env.envs import PairFlockGymEnv
-
-        env = _with_interface(PairFlockGymEnv, "world" if case == "gym" else "pair", **kw)
+        env = _with_interface(envs.PairFlockGymEnv, "world" if case == "gym" else "pair", **kw)
         env.reset(seed=0)
         act = np.full(env.action_space.shape, 0.1, np.float32)
         return lambda: env.step(act)
     if case == "vector-pair":
-        from pairflock_env.envs import vector
-
+        vector = importlib.import_module("pairflock_env.envs.vector")
         cls = getattr(vector, "PairFlockGymVectorEnv", None) or vector.PairFlockVectorEnv
         env = _with_interface(cls, "pair", num_envs=1, **kw)
         env.reset(seed=0)
         act = np.full(env.action_space.shape, 0.1, np.float32)
         return lambda: env.step(act)
     if case == "sb3-pair":
-        from pairflock_env.envs import sb3
-
+        sb3 = importlib.import_module("pairflock_env.envs.sb3")  # SB3: an optional dependency
         cls = getattr(sb3, "PairFlockSB3VecEnv", None) or sb3.PairFlockVecEnv
         env = _with_interface(cls, "pair", num_swarms=1, **kw)
         env.reset()
@@ -86,9 +86,7 @@ def make_stepper(case: str, N: int):
 
 
 def worker(case: str, N: int, repeats: int, min_time: float, cpu_time: bool) -> float:
-    sys.path.insert(0, str(HERE))
-    from _timing import median_rate
-
+    """The median rate of ``case`` at N UAVs, in this process (the worker of a measurement)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fn = make_stepper(case, N)
@@ -117,7 +115,10 @@ def main(argv=None) -> int:
     ap.add_argument("--min-time", type=float, default=0.2)
     ap.add_argument("--cpu-time", action="store_true", help="this process's CPU time")
     ap.add_argument("--worker", nargs=2, metavar=("CASE", "N"), help=argparse.SUPPRESS)
+    ap.add_argument("--smoke", action="store_true", help="every case once, tiny (N = 8)")
     args = ap.parse_args(argv)
+    if args.smoke:
+        args.n_uavs, args.repeats, args.min_time, args.compare = [8], 1, 0.0, None
     if args.worker:
         case, N = args.worker[0], int(args.worker[1])
         print(json.dumps({"rate": worker(case, N, args.repeats, args.min_time, args.cpu_time)}))

@@ -7,7 +7,9 @@ One control step (:meth:`PairFlockCore.step`), stage by stage:
 2. decode: clip to [-1, 1], scale by ``pair_accel_limit`` to m/s^2, giving the pair command
    u = f^x of every paired UAV (:meth:`PairFlockCore.decode_actions`); with
    ``safety_filter="cbf"`` each paired UAV then filters its u from what it senses
-   (:class:`~pairflock_env.safety.stage.SafetyStage`, docs/safety.md);
+   (:class:`~pairflock_env.safety.stage.CBFStage`, docs/safety.md), or, with
+   ``safety_scope="swarm"``, every UAV filters its whole command f (+ u)
+   (:class:`~pairflock_env.safety.stage.SwarmStage`, docs/swarm-safety.md);
 3. a_des = flocking command of the current state (eqs. 11-19) + u on the paired UAVs
    (+ the random disturbance, when configured);
 4. the vehicle model integrates ``substeps`` physics steps with a_des held;
@@ -37,6 +39,7 @@ from pairflock_env.config.arrays import real_array
 from pairflock_env.dynamics import ParticleModel, QuadrotorModel, make_vehicle
 from pairflock_env.kernels import jit_kernel
 from pairflock_env.safety import make_safety_stage
+from pairflock_env.safety.stage import NoFilterStage
 from pairflock_env.seeding import swarm_generators
 from pairflock_env.swarm.grid import NeighborGrid
 from pairflock_env.swarm.leader import make_leader
@@ -47,6 +50,7 @@ from pairflock_env.task.agent_pass import AGENT_ROWS, AgentPass
 from pairflock_env.task.delay import PartnerDelayBuffer
 from pairflock_env.task.infos import (
     AGENT_INFO_KEYS,
+    SAFETY_SWARM_INFO_KEYS,
     SWARM_INFO_KEYS,
     StepResult,
     hold_last_finite,
@@ -170,6 +174,7 @@ class PairFlockCore:
         self._perceived = bool(cfg.partner_delay or noisy or cfg.obs_extra)
         #: whether a step does no numpy arithmetic that could overflow (a diverging swarm's
         #: overflow would only raise warnings, which the step masks otherwise)
+        self._no_filter = type(self.safety) is NoFilterStage
         numba_stages = type(self.vehicle) in (ParticleModel, QuadrotorModel)
         numba_stages &= cfg.safety_filter == "none" and cfg.disturbance_std == 0
         self._quiet = numba_stages and not (self._perceived or self._check_finite)
@@ -344,8 +349,14 @@ class PairFlockCore:
 
     def _desired_acceleration(self, u: np.ndarray) -> np.ndarray:
         """a_des (B, N, dim): the flocking command of the current state, plus the pair
-        command u on the paired UAVs, plus the random disturbance (when configured)."""
-        a_des = add_pair_command(self._flock_out["acc"], self.agent_uavs, u)
+        command u on the paired UAVs (or the safety stage's filtered whole command, when it
+        filters every UAV's: ``safety_scope="swarm"``), plus the random disturbance (when
+        configured)."""
+        whole = getattr(self.safety, "whole_command", None)
+        if whole is not None:
+            a_des = whole.copy()
+        else:
+            a_des = add_pair_command(self._flock_out["acc"], self.agent_uavs, u)
         if self.config.disturbance_std > 0:
             a_des += self.config.disturbance_std * self._draw_normal(a_des.shape[1:])
         return a_des
@@ -378,6 +389,9 @@ class PairFlockCore:
             finite = np.isfinite(reward) & np.isfinite(rows["sliding_surface"])
             diverged |= ~finite.all(axis=1)
         safety = self.safety.info(reset=reset_rows is not None)
+        if self._no_filter:  # what make_info would count: no UAV's command was changed
+            B = self.num_swarms
+            safety |= {k: np.zeros(B, np.int64) for k in SAFETY_SWARM_INFO_KEYS}
         terms = {k: rows[f"reward_{k}"] for k in REWARD_TERMS}
         info = make_info(rows, fl, u, clipped, self.t, diverged, terms, safety, rows["pair_accel"])
         if np.count_nonzero(
@@ -452,7 +466,10 @@ class PairFlockCore:
         obs_size) float32 of the current state (layout by name), the per-agent results
         ``AGENT_ROWS`` and whether each swarm's observation is finite. The partner delay,
         sensor noise and registered extra fields, when configured, replace their fields."""
-        obs, res, finite = self._agents.run(self.q, self.p, fl["acc"], fl["min_d2"], lq, lp, u, pp)
+        obs, res, finite, closest = self._agents.run(
+            self.q, self.p, fl["acc"], fl["min_d2"], lq, lp, u, pp
+        )
+        fl["swarm_min_separation"] = closest
         if not self._perceived:
             return obs, res, finite
         cfg = self.config

@@ -110,8 +110,8 @@ def swarm_generators(seed: Any, n: int, name: str = "seed") -> list[np.random.Ge
 
 def offset_seeds(seed: Any, n: int, name: str = "seed") -> list | None:
     """Per-sub-env seeds under the vector views' rule: ``None`` -> None, an int ``s`` ->
-    ``[s, s + 1, ..., s + n - 1]``, a SeedSequence -> its ``n`` children, a sequence (list, tuple or 1-D array) of
-    ``n`` seeds -> those seeds (validated)."""
+    ``[s, s + 1, ..., s + n - 1]``, a SeedSequence -> its ``n`` children, a sequence (list,
+    tuple or 1-D array) of ``n`` seeds -> those seeds (validated)."""
     if _entries(seed) is not None:
         return check_seed_list(seed, n, name)
     s = check_seed(seed, name)

@@ -11,6 +11,10 @@ import pytest
 
 from pairflock_env import make_config
 
+#: the toy plug-ins register into the env's registries when imported: only the fresh
+#: interpreters of tests/test_plugins.py load them (--doctest-modules would import them here)
+collect_ignore = ["plugins"]
+
 #: every vehicle model the env offers; tests over ``dynamics`` run once per entry
 DYNAMICS = ["particle", "quadrotor"]
 

@@ -3,7 +3,7 @@ criterion with room to spare; tests override the metrics they want to miss."""
 
 from __future__ import annotations
 
-from baselines.reporting.criteria import QUADROTOR
+from baselines.experiments.quadrotor.criteria import QUADROTOR
 
 
 def quad_row(policy: str, dynamics: str, seed, **over) -> dict:

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import importlib.util
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -150,9 +153,6 @@ def test_every_gain_is_checked_and_named(name, gain):
 
 def _controllers(env):
     """The analytic controllers and, where SB3 is installed, the committed learned one."""
-    import importlib.util
-    from pathlib import Path
-
     yield from (make_pair_policy(n, env) for n in ("smc", "proportional", "braking", "zero"))
     if importlib.util.find_spec("stable_baselines3") is not None:
         model = Path(__file__).resolve().parents[1] / "models" / "pair_n20_a50.zip"

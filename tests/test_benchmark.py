@@ -4,17 +4,22 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from baselines import POLICIES
+from baselines import POLICIES, reproduce
 from baselines.benchmark import main
 from baselines.evaluation.specs import expand_scenarios, parse_policy, parse_scenario, slug
-from baselines.reporting.benchmark_figures import load_traces
+from baselines.experiments.benchmark import build_parser, resolve
+from baselines.experiments.benchmark.figures import load_traces
+from baselines.experiments.quadrotor.experiment import _settings
+from baselines.experiments.quadrotor.experiment import build_parser as quad_parser
 
 #: a tiny task: 8 UAVs, 2 s, so that each run is a fraction of a second
 TINY = ["--suite", "quick", "--n-uavs", "8", "--horizon", "2", "--seeds", "2", "--quiet"]
@@ -123,8 +128,7 @@ def test_figures_video_and_same_initial_states(figure_run):
         "steady_error.png",
         "steady_max_error.png",
     ]  # no snapshots of "zero"
-    import imageio.v3 as iio
-
+    iio = pytest.importorskip("imageio.v3")
     frames = iio.imread(figure_run / "ep.gif")
     assert frames.ndim == 4 and frames.shape[0] > 1 and frames.shape[-1] in (3, 4)
     # every policy starts from the same initial state
@@ -163,8 +167,6 @@ def test_ray_backend_matches_local(tmp_path):
 
 
 def test_reproduce_is_the_paper_suite(tmp_path, capsys):
-    from baselines import reproduce
-
     out = tmp_path / "r"
     rc = reproduce.main(
         [
@@ -313,9 +315,6 @@ def test_a_killed_rerun_leaves_the_old_set_or_a_marked_folder(tmp_path):
     """SIGKILL a rerun into a finished folder while it writes: the folder holds the old set
     untouched (or, had it got that far, the new set), never new results beside an old
     summary; a later run cleans up after the killed one."""
-    import signal
-    import time
-
     out = tmp_path / "res"
     assert main([*TINY, "-p", "smc", "--workers", "1", "--out", str(out)]) == 0
     old = _result_files(out)
@@ -380,10 +379,6 @@ def test_an_interrupted_swap_marks_the_folder_incomplete(tmp_path, monkeypatch, 
 def test_set_values_are_numbers_as_written():
     """The benchmark's and the quadrotor experiment's --set read ``1e-3``/``5e1`` as numbers
     (the parser every CLI shares, :func:`baselines.evaluation.specs.parse_value`)."""
-    from baselines.experiments.benchmark import build_parser, resolve
-    from baselines.experiments.quadrotor_experiment import _settings
-    from baselines.experiments.quadrotor_experiment import build_parser as quad_parser
-
     parser = build_parser()
     args = parser.parse_args([*TINY, "-p", "smc", "--set", "dt=1e-2,5e-3", "--set", "d_m=5e0"])
     plan = resolve(args, parser)

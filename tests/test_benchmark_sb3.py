@@ -9,6 +9,10 @@ import pytest
 from baselines import POLICIES
 from baselines.benchmark import main
 
+pytest.importorskip("stable_baselines3")
+
+from train.settings import settings_from_sources
+
 TINY = ["--suite", "quick", "--n-uavs", "8", "--horizon", "2", "--seeds", "2", "--quiet"]
 
 
@@ -17,7 +21,6 @@ def test_learned_policy_runs_next_to_the_analytic_ones(tmp_path):
     same seeds as smc, and its label names it in the results."""
     pytest.importorskip("stable_baselines3")
     train_run = pytest.importorskip("train.run")
-    from train.settings import settings_from_sources
 
     if "sb3:" not in POLICIES:
         pytest.skip("this install has no sb3: policies")

@@ -30,9 +30,8 @@ def test_sb3_example():
 @pytest.mark.parametrize("aec", [False, True])
 @pytest.mark.parametrize("interface", ["world", "pair"])
 def test_torchrl_pettingzoo_wrapper_builds_specs_and_rolls_out(aec, interface):
-    pytest.importorskip("torchrl")
-    from torchrl.envs.libs.pettingzoo import PettingZooWrapper
-    from torchrl.envs.utils import check_env_specs
+    PettingZooWrapper = pytest.importorskip("torchrl.envs.libs.pettingzoo").PettingZooWrapper
+    check_env_specs = pytest.importorskip("torchrl.envs.utils").check_env_specs
 
     make = pairflock_env.env if aec else pairflock_env.parallel_env
     env = PettingZooWrapper(

@@ -25,8 +25,8 @@ from pairflock_env.config.sections.initial_state import start_density
 from pairflock_env.config.sections.observation import base_obs_size as obs_size
 from pairflock_env.interfaces import PairInterfaceParams, interface_from_dict, make_interface
 from pairflock_env.task.observations import ObsLayout
+from train.mix.tasks import training_tasks
 from train.settings import RunSettings
-from train.tasks import training_tasks
 
 
 def test_paper_preset_matches_the_notes_table():

@@ -13,17 +13,18 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: the documented ``python -m`` commands and the console script each one must have
 EXPECTED = {
-    "pairflock-benchmark": "baselines.experiments.benchmark:main",
-    "pairflock-reproduce": "baselines.experiments.reproduce:main",
-    "pairflock-quadrotor": "baselines.experiments.quadrotor_experiment:main",
-    "pairflock-quadrotor-invariants": "baselines.experiments.quadrotor_invariants:main",
-    "pairflock-quadrotor-compare": "baselines.experiments.quadrotor_compare:main",
-    "pairflock-safety-compare": "baselines.experiments.safety_compare:main",
-    "pairflock-train": "train.cli:main",
-    "pairflock-evaluate": "train.evaluate:main",
-    "pairflock-train-eval": "train.evaluate:main",
-    "pairflock-throughput": "train.throughput:main",
-    "pairflock-imitate": "train.imitate:main",
+    "pairflock-benchmark": "baselines.benchmark:main",
+    "pairflock-reproduce": "baselines.reproduce:main",
+    "pairflock-quadrotor": "baselines.quadrotor_experiment:main",
+    "pairflock-quadrotor-invariants": "baselines.quadrotor_invariants:main",
+    "pairflock-quadrotor-compare": "baselines.quadrotor_compare:main",
+    "pairflock-safety-compare": "baselines.safety_compare:main",
+    "pairflock-train": "train.__main__:main",
+    "pairflock-evaluate": "train.evaluate.__main__:main",
+    "pairflock-sweep": "train.sweep.__main__:main",
+    "pairflock-imitate": "train.imitate.__main__:main",
+    "pairflock-replay": "pairflock_env.replay.__main__:main",
+    "pairflock-export": "baselines.export.__main__:main",
 }
 
 

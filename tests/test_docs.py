@@ -121,14 +121,77 @@ def test_every_repository_path_the_docs_name_exists():
 
 
 def test_every_console_script_has_its_section_on_the_command_lines_page():
-    """docs/api/cli.md documents each console script's module (its docstring or ``--help``),
-    under the documented ``python -m`` name or the module's own."""
+    """docs/api/cli.md documents each console script under its ``python -m`` command (the
+    launcher the script runs: ``baselines.benchmark``, ``train.sweep.__main__``), with the
+    ``--help`` of a parser."""
     tomllib = pytest.importorskip("tomllib")
     scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
     page = (DOCS / "api" / "cli.md").read_text()
-    shown = re.findall(r"<!-- cli-help: ([\w.]+):\w+ -->", page)
-    shown += re.findall(r"^::: ([\w.]+)$", page, flags=re.M)
-    names = {m.split(".")[-1] for m in shown}  # baselines.benchmark, ...experiments.benchmark
-    modules = {target.split(":")[0] for target in scripts.values()}
-    missing = sorted(m for m in modules if m.split(".")[-1] not in names)
+    headed = set(re.findall(r"^## .*`python -m ([\w.]+)`$", page, flags=re.M))
+    commands = {t.split(":")[0].removesuffix(".__main__") for t in scripts.values()}
+    missing = sorted(commands - headed)
     assert not missing, f"console scripts without a section in docs/api/cli.md: {missing}"
+    assert len(re.findall(r"<!-- cli-help: [\w.]+:\w+ -->", page)) >= len(commands) - 1
+
+
+#: the records of measured results (tables with the commands that give them, the history of
+#: the measurements): the nav's "Results records", exempt from the guides' length limit
+RECORDS = (
+    "reproduction.md",
+    "benchmark.md",
+    "safety-results.md",
+    "learning-results.md",
+    "crazyflie-results.md",
+    "speed.md",
+    "large-swarms.md",
+)
+README_MAX_LINES, GUIDE_MAX_LINES = 150, 400
+
+
+def test_the_readme_and_every_guide_stay_short():
+    """The README says what the project is, how to set it up, the main job, how to extend it
+    and where to read on, in at most 150 lines; a guide (every docs page but the records)
+    says what a part is, how to use it and what it guarantees in at most 400, and links to its
+    record for the measured tables."""
+    readme = len((ROOT / "README.md").read_text().splitlines())
+    assert readme <= README_MAX_LINES, (
+        f"README.md has {readme} lines (at most {README_MAX_LINES}): link to the docs instead"
+    )
+    long = [
+        f"docs/{name}: {lines} lines"
+        for path in sorted(DOCS.rglob("*.md"))
+        if (name := path.relative_to(DOCS).as_posix()) not in RECORDS
+        and (lines := len(path.read_text().splitlines())) > GUIDE_MAX_LINES
+    ]
+    assert not long, (
+        f"guides longer than {GUIDE_MAX_LINES} lines (move measured results to a record page):\n"
+        + "\n".join(long)
+    )
+
+
+def test_the_records_are_marked_and_listed_as_records():
+    yaml = pytest.importorskip("yaml")
+    nav = yaml.safe_load((ROOT / "mkdocs.yml").read_text())["nav"]
+    (section,) = [
+        e["Results records"] for e in nav if isinstance(e, dict) and "Results records" in e
+    ]
+    assert sorted(page for entry in section for page in entry.values()) == sorted(RECORDS)
+    home = (DOCS / "index.md").read_text()
+    for page in RECORDS:
+        title = (DOCS / page).read_text().splitlines()[0]
+        assert title.startswith("# ") and title.endswith("(measured records)"), (page, title)
+        assert f"]({page})" in home, f"the home page does not list the record {page}"
+
+
+def test_the_readme_links_to_pages_and_headings_that_exist():
+    """mkdocs checks the site's links; the README is not part of the site."""
+    slugify = pytest.importorskip("markdown.extensions.toc").slugify
+    links = re.findall(r"\]\((docs/[^)#]+)(?:#([^)]+))?\)", (ROOT / "README.md").read_text())
+    assert links
+    for path, anchor in links:
+        text = (ROOT / path).read_text()
+        assert text, path
+        if anchor:
+            headings = re.findall(r"^#+ (.+)$", re.sub(r"```.*?```", "", text, flags=re.S), re.M)
+            slugs = {slugify(h.replace("`", "").strip(), "-") for h in headings}
+            assert anchor in slugs, f"README links to {path}#{anchor}, which has no such heading"

@@ -6,8 +6,16 @@ import sys
 import numpy as np
 import pytest
 
-from pairflock_env import PairFlockCore, make_config
+from baselines import make_pair_policy
+from baselines.evaluation.rollout import rollout, trace_metrics
+from pairflock_env import PairFlockCore, make_config, parallel_env
 from pairflock_env.interfaces import make_interface
+
+pytest.importorskip("torch")
+pytest.importorskip("stable_baselines3")
+
+from train.imitate.cli import SEED_METRICS, seed_summary
+from train.imitate.dagger import _settings, imitate
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -33,10 +41,6 @@ def test_action_for_inverts_decode(dim):
 
 
 def test_imitation_writes_a_loadable_model_that_follows_its_teacher(tmp_path):
-    from baselines import make_pair_policy
-    from pairflock_env import parallel_env
-    from train.imitate import imitate
-
     rec = imitate(
         "pair_n20_a50", tmp_path / "bc", seed=0, iterations=2, decisions=40, epochs=3,
         env_sets=[("max_cycles", 100)], quiet=True,
@@ -53,8 +57,6 @@ def test_imitation_writes_a_loadable_model_that_follows_its_teacher(tmp_path):
 
 
 def test_seed_summary_picks_the_lowest_validation_score():
-    from train.imitate import SEED_METRICS, seed_summary
-
     def rec(seed, score):
         return {"seed": seed, "validation": {k: score + i for i, (k, _) in enumerate(SEED_METRICS)}}
 
@@ -83,8 +85,6 @@ def test_imitate_cli_help_and_bad_arguments():
 
 
 def test_eval_sets_change_the_validation_only():
-    from train.imitate import _settings
-
     s = _settings("pair_safe_a50", 3, [("safety_filter", "none")], [("safety_filter", "cbf")])
     assert s.seed == 3 and s.init_model is None
     assert s.env["safety_filter"] == "none" and s.eval_env["safety_filter"] == "cbf"
@@ -96,8 +96,6 @@ def test_committed_generalist_meets_beside_the_flock():
     own task): into the band well before 5 s, beside the flock (nowhere near 1 m of another
     UAV), within its 50 m/s^2 bound. Seed 7 is in no seed set the docs report."""
     pytest.importorskip("stable_baselines3")
-    from baselines import make_pair_policy
-    from baselines.evaluation.rollout import rollout, trace_metrics
 
     cfg = make_config(
         "paper", n_uavs=100, init="corners", pair_accel_limit=50.0, obs_neighbors=12,

@@ -1,12 +1,18 @@
-"""The import layers: the env imports neither controllers, evaluation nor training code, and
-``baselines`` / ``train`` import only downwards.
+"""The import layers and the import graph.
 
-    pairflock_env  <  baselines.controllers  <  baselines.evaluation  <  baselines.reporting
-                   <  baselines.experiments (the CLIs)
-                   <  train (which uses controllers, evaluation and reporting, not the CLIs)
+Layers: the env imports neither experiments nor training code, and ``baselines`` / ``train``
+import only downwards::
 
-Checked twice: statically (every ``import`` in every file, also inside functions) and, for
-the env, by importing every module in a fresh interpreter and looking at ``sys.modules``.
+    pairflock_env  <  baselines.runtime  <  baselines.controllers  <  baselines.evaluation
+                   <  baselines.reporting  <  baselines.experiments (and the launchers
+                      beside baselines/__init__.py)
+                   <  train (runtime, controllers, evaluation and reporting; no experiment)
+
+``baselines.runtime`` (files, run records, thread pinning, processes, the CLI error path) is
+the bottom of ``baselines`` and imports no other first-party code. Checked statically (every
+``import`` in every file, also inside functions) and, for the env, by importing every module
+in a fresh interpreter and looking at ``sys.modules``. The graph of the three packages has no
+cycle, and a launcher loads nothing heavy before it pins the threads.
 """
 
 from __future__ import annotations
@@ -15,33 +21,31 @@ import ast
 import json
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("pairflock_env", "baselines", "train")
 
 #: layer -> the layers its modules may import (besides pairflock_env and third-party code)
 ALLOWED = {
-    "controllers": {"controllers"},
-    "evaluation": {"controllers", "evaluation"},
-    "reporting": {"controllers", "evaluation", "reporting"},
-    "experiments": {"controllers", "evaluation", "reporting", "experiments"},
-    "train": {"controllers", "evaluation", "reporting", "train"},
+    "runtime": {"runtime"},
+    "controllers": {"runtime", "controllers"},
+    "evaluation": {"runtime", "controllers", "evaluation"},
+    "reporting": {"runtime", "controllers", "evaluation", "reporting"},
+    "experiments": {"runtime", "controllers", "evaluation", "reporting", "experiments"},
+    "train": {"runtime", "controllers", "evaluation", "reporting", "train"},
 }
-#: the top-level modules of ``baselines``: the package facade (the controllers' names) and
-#: the launchers of the documented ``python -m baselines.<cli>`` commands
-TOP_LEVEL = {
-    "__init__": "controllers",
-    "_moved": "controllers",
-    "benchmark": "experiments",
-    "reproduce": "experiments",
-    "quadrotor_experiment": "experiments",
-    "quadrotor_invariants": "experiments",
-    "quadrotor_compare": "experiments",
-    "safety_compare": "experiments",
-}
+#: the documented commands ``python -m baselines.<name>``: launchers of the experiments
+LAUNCHERS = (
+    "benchmark",
+    "reproduce",
+    "quadrotor_experiment",
+    "quadrotor_invariants",
+    "quadrotor_compare",
+    "safety_compare",
+)
 
 
 def _module_name(path: Path) -> str:
@@ -83,7 +87,9 @@ def _layer(module: str) -> str | None:
         return "controllers"  # the package facade: the controllers' names
     if parts[1] in ALLOWED:
         return parts[1]
-    return TOP_LEVEL.get(parts[1], "controllers")  # an old alias path or a facade name
+    if parts[1] in LAUNCHERS:
+        return "experiments"
+    return "controllers"  # a name of the facade (baselines.make_pair_policy)
 
 
 def _files(package: str) -> list[Path]:
@@ -127,7 +133,9 @@ def _own_layer(path: Path) -> str:
     rel = path.relative_to(ROOT).parts
     if rel[0] == "train":
         return "train"
-    return rel[1] if rel[1] in ALLOWED else TOP_LEVEL[Path(rel[1]).stem]
+    if len(rel) == 2:  # baselines/__init__.py or a launcher
+        return "experiments" if Path(rel[1]).stem in LAUNCHERS else "controllers"
+    return rel[1]
 
 
 @pytest.mark.parametrize("package", ["baselines", "train"])
@@ -141,63 +149,120 @@ def test_each_layer_imports_only_downwards(package):
     assert not wrong
 
 
+def test_runtime_is_the_bottom_of_baselines():
+    """``baselines.runtime`` imports no other first-party code (the env neither)."""
+    wrong = {
+        str(f.relative_to(ROOT)): sorted(
+            m for m in _imports(f) if m.split(".")[0] in PACKAGES and _layer(m) != "runtime"
+        )
+        for f in _files("baselines/runtime")
+    }
+    assert not {f: m for f, m in wrong.items() if m}
+
+
 def test_the_checker_sees_relative_and_nested_imports():
     """An evaluation module importing reporting - relatively, inside a function - is
-    flagged; the facade ``baselines`` counts as the controllers."""
+    flagged; the facade ``baselines`` counts as the controllers; a launcher as an
+    experiment; runtime as the bottom."""
     source = "def f():\n    from ..reporting import tables\n    import train.run\n"
     found = _imports_of(source, "baselines.evaluation.rollout")
     assert {"baselines.reporting", "baselines.reporting.tables", "train.run"} <= found
     assert {_layer(m) for m in found} - ALLOWED["evaluation"] == {"reporting", "train"}
     assert _layer("baselines.experiments.benchmark") not in ALLOWED["train"]
+    assert _layer("baselines.benchmark") not in ALLOWED["train"]
     assert _layer("baselines") in ALLOWED["evaluation"]
+    assert _layer("baselines.runtime.files") in ALLOWED["controllers"]
+    assert _layer("baselines.controllers") not in ALLOWED["runtime"]
 
 
-def test_thread_pinning_loads_before_numpy():
-    """``pin_threads`` must run before numpy loads, so importing it loads nothing heavy."""
+# --------------------------------------------------------------------------- cycles
+def _graph() -> dict[str, set[str]]:
+    """Module -> the first-party modules it imports (at any depth), as module names."""
+    files = [f for pkg in PACKAGES for f in _files(pkg)]
+    modules = {_module_name(f) for f in files}
+    graph: dict[str, set[str]] = {}
+    for f in files:
+        deps = set()
+        for m in _imports(f):
+            # "from a.b import c": the module a.b.c if there is one, else a.b
+            while m and m not in modules:
+                m = m.rpartition(".")[0]
+            if m and m != _module_name(f):
+                deps.add(m)
+        graph[_module_name(f)] = deps
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                out.append(sorted(component))
+
+    sys.setrecursionlimit(max(sys.getrecursionlimit(), 10_000))
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_no_import_cycle(package):
+    """No two modules import each other, directly or through others (imports inside
+    functions count: a cycle hidden there is still one)."""
+    found = [c for c in _cycles(_graph()) if any(m.split(".")[0] == package for m in c)]
+    assert not found, f"import cycles: {found}"
+
+
+def test_the_cycle_finder_finds_one():
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []
+
+
+# --------------------------------------------------------------------------- launchers
+@pytest.mark.parametrize(
+    "module",
+    [
+        "baselines.runtime.threads",
+        *(f"baselines.{name}" for name in LAUNCHERS),
+        "train.__main__",
+        "train.evaluate.__main__",
+        "train.imitate.__main__",
+        "train.sweep.__main__",
+        "train.sweep.worker",
+    ],
+)
+def test_a_launcher_loads_nothing_heavy_before_it_pins_the_threads(module):
+    """Each command's launcher pins one thread per process before numpy, numba or torch
+    load, so importing it (and the thread pinning) loads none of them."""
     code = (
-        "import sys; from baselines.evaluation.parallel import pin_threads; pin_threads();"
+        f"import importlib, sys; importlib.import_module({module!r});"
         "print(sorted(m for m in ('numpy', 'torch', 'numba', 'pairflock_env') if m in sys.modules))"
     )
-    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    r = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=ROOT
+    )
     assert r.returncode == 0 and r.stdout.strip() == "[]", (r.stdout, r.stderr)
-
-
-OLD_PATHS = {
-    "baselines.rollout": ("rollout", "baselines.evaluation.rollout"),
-    "baselines.sweep": ("run_jobs", "baselines.evaluation.jobs"),
-    "baselines.specs": ("parse_policy", "baselines.evaluation.specs"),
-    "baselines.io": ("write_csv", "baselines.evaluation.io"),
-    "baselines.report": ("check_paper_claims", "baselines.reporting.criteria"),
-    "baselines.figures": ("save_figure", "baselines.reporting.figures"),
-    "baselines.quadrotor_figures": ("euler_figure", "baselines.reporting.quadrotor_figures"),
-    "baselines.video": ("write_episode_video", "baselines.reporting.video"),
-    "baselines.policies": ("PairPolicy", "baselines.controllers.base"),
-    "baselines.sliding_mode": ("SlidingModeController", "baselines.controllers.sliding_mode"),
-    "baselines.proportional": ("ProportionalController", "baselines.controllers.proportional"),
-    "baselines.sb3_policy": ("SB3PairPolicy", "baselines.controllers.sb3"),
-}
-
-
-@pytest.mark.parametrize("old", sorted(OLD_PATHS))
-def test_old_module_paths_warn_and_give_the_same_objects(old):
-    import importlib
-
-    name, new = OLD_PATHS[old]
-    sys.modules.pop(old, None)
-    with pytest.warns(DeprecationWarning, match=f"{old} is deprecated"):
-        mod = importlib.import_module(old)
-    assert getattr(mod, name) is getattr(importlib.import_module(new), name)
-    assert name in mod.__all__
-    with pytest.raises(AttributeError, match="no attribute"):
-        mod.no_such_name  # noqa: B018
-
-
-def test_the_cli_paths_are_launchers_not_deprecated():
-    import importlib
-
-    for cli in ("benchmark", "reproduce", "quadrotor_experiment", "quadrotor_invariants"):
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", DeprecationWarning)
-            launcher = importlib.import_module(f"baselines.{cli}")
-        impl = importlib.import_module(f"baselines.experiments.{cli}")
-        assert launcher.main is impl.main

@@ -10,7 +10,12 @@ from pathlib import Path
 
 import pytest
 
+from baselines import make_pair_policy
+from baselines.controllers.sb3 import read_metadata
 from baselines.controllers.zoo import find_packaged, model_names, resolve_model
+from pairflock_env import make_config
+from train import cli
+from train.evaluate import cli as evaluate
 from train.settings import config_names, load_yaml, resolve_config
 
 try:
@@ -105,11 +110,6 @@ def test_the_checkout_models_folder_is_the_packaged_one():
 def test_packaged_names_load_through_the_public_entry_points(tmp_path, monkeypatch, capsys):
     """``--config NAME``, ``sb3:NAME`` and ``python -m train.evaluate NAME`` from a folder
     without the files; a bad name stops the CLIs with the list of valid ones."""
-    from baselines import make_pair_policy
-    from baselines.controllers.sb3 import read_metadata
-    from pairflock_env import make_config
-    from train import cli, evaluate
-
     monkeypatch.chdir(tmp_path)
     name = config_names()[0]
     assert load_yaml(name) == load_yaml(ROOT / "train" / "configs" / f"{name}.yaml")

@@ -12,17 +12,17 @@ import math
 import numpy as np
 import pytest
 
-from baselines.experiments.quadrotor_runs import scenario_metrics
-from baselines.quadrotor_experiment import main
-from baselines.quadrotor_invariants import (
+from baselines.experiments.quadrotor.invariants import (
     hover_drift,
     hovering_model,
     orthonormality_over_scenario,
     step_response,
 )
+from baselines.experiments.quadrotor.runs import scenario_metrics
+from baselines.quadrotor_experiment import main
 from pairflock_env import PairFlockCore, make_config, parallel_env
-from pairflock_env.dynamics import quadrotor as Q
 from pairflock_env.dynamics.quadrotor import QuadrotorModel
+from pairflock_env.dynamics.quadrotor import kernels as Q
 from pairflock_env.math3d import (
     euler_zyx,
     hat,

@@ -11,7 +11,8 @@ import dataclasses
 import pytest
 from quadrotor_rows import quad_row as _row
 
-from baselines.reporting.criteria import QUADROTOR, check_quadrotor
+from baselines.experiments.quadrotor.criteria import QUADROTOR, check_quadrotor
+from baselines.experiments.quadrotor.experiment import main
 
 LEARNED = "sb3:pair_quad3d"  # the packaged 3-D policy (train/configs/pair_quad3d.yaml)
 
@@ -45,8 +46,6 @@ def test_the_criteria_apply_to_any_named_controller_and_keep_smc_lines():
 
 
 def test_the_experiment_runs_a_learned_policy_by_its_packaged_name(tmp_path):
-    from baselines.quadrotor_experiment import main
-
     out = tmp_path / "q"
     common = ["--seeds", "1", "--horizon", "1", "--workers", "1", "--no-figures", "--quiet"]
     assert main(["--policies", "smc", LEARNED, *common, "--out", str(out)]) == 0

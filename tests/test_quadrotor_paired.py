@@ -13,9 +13,14 @@ from quadrotor_rows import quad_row
 from result_files import write_results
 from scipy.stats import binomtest
 
-from baselines.reporting.criteria import QUADROTOR, check_quadrotor
-from baselines.reporting.quadrotor_criteria import CRITERIA_KEYS, run_outcomes
-from baselines.reporting.quadrotor_paired import compare_runs, mcnemar_exact, paired_lines
+from baselines.experiments.quadrotor.criteria import (
+    CRITERIA_KEYS,
+    QUADROTOR,
+    check_quadrotor,
+    run_outcomes,
+)
+from baselines.experiments.quadrotor.paired import compare_runs, paired_lines
+from baselines.reporting.stats import mcnemar_exact
 
 C = QUADROTOR
 

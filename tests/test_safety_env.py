@@ -13,9 +13,8 @@ from view_helpers import VIEWS, make_view, reset_view, step_view, zero_action
 
 from baselines.controllers import make_pair_policy
 from baselines.experiments.benchmark.cli import build_parser, resolve
-from baselines.reporting.safety_figure import closest_pass_figure, read_rows
+from baselines.experiments.safety.figure import closest_pass_figure, read_rows
 from pairflock_env import AGENT_INFO_KEYS, PairFlockConfig, PairFlockCore, make_config
-from pairflock_env.config.sections.quadrotor import REACTION_CYCLES as QUAD_REACTION_CYCLES
 from pairflock_env.config.sections.safety import (
     BOUND_OTHER_SHARE as QUAD_OTHER_SHARE,
 )
@@ -25,6 +24,7 @@ from pairflock_env.config.sections.safety import (
     OTHER_SHARE,
 )
 from pairflock_env.dynamics import VEHICLES
+from pairflock_env.dynamics.quadrotor.section import REACTION_CYCLES as QUAD_REACTION_CYCLES
 from pairflock_env.safety import SafetyParams
 from pairflock_env.safety.stage import SAFETY_INFO_KEYS
 
@@ -72,7 +72,7 @@ def test_unset_filter_parameters_follow_the_vehicle():
     assert p.brake_accel == L and p.other_accel == pytest.approx(QUAD_OTHER_SHARE * L)
     assert p.reaction_time == pytest.approx(QUAD_REACTION_CYCLES / q.quad_attitude_freq)
     assert p.decay == VEHICLES["quadrotor"].safety_decay
-    # what docs/safety.md measured on the quadrotor, to the last bit
+    # what docs/safety-results.md measured on the quadrotor, to the last bit
     assert (p.brake_accel, p.other_accel, p.reaction_time, p.decay) == (6.0, 2.0, 0.1, 0.1)
     # the attitude loop sets tau: a slower loop (with the physics step it needs) waits longer
     slow = SafetyParams.from_config(q.replace(quad_attitude_freq=7.5))

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from result_files import write_results
 
-from baselines.reporting.safety_paired import compare_filter, paired_filter_lines
+from baselines.experiments.safety.paired import compare_filter, paired_filter_lines
 
 
 def _row(policy, n, flt, seed, err, band=3.0, **extra):

@@ -16,8 +16,8 @@ from view_helpers import snapshot
 
 import pairflock_env
 from baselines import make_pair_policy
+from baselines.controllers.sb3 import METADATA_KEY
 from baselines.evaluation.rollout import rollout, trace_metrics
-from baselines.sb3_policy import METADATA_KEY
 from pairflock_env import ENV_ID, make_config, parallel_env
 from pairflock_env.envs import PairFlockSB3VecEnv, sb3
 
@@ -225,7 +225,7 @@ def test_names_say_what_they_count_and_old_names_are_gone():
     assert (env.num_swarms, env.num_rows, env.num_envs, env.agents_per_swarm) == (3, 6, 6, 2)
     vec = pairflock_env.PairFlockGymVectorEnv(num_envs=3, **SMALL)
     assert (vec.num_swarms, vec.num_rows, vec.num_envs) == (3, 3, 3)
-    # no deprecated name is kept before the first release (docs/changes.md)
+    # no old name is kept alive before the first release (docs/changes.md)
     for module, old in ((sb3, "PairFlockVecEnv"), (pairflock_env, "PairFlockVectorEnv")):
         assert not hasattr(module, old)
     with pytest.raises(TypeError, match="'frame'"):

@@ -17,9 +17,22 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from baselines.reporting.stats import iqm_ci
+
 pytest.importorskip("torch")
 pytest.importorskip("stable_baselines3")
 pytest.importorskip("rliable")
+
+from rliable import metrics
+
+from train.checkpoint import latest_checkpoint
+from train.mix.evaluation import aggregate_score
+from train.settings import load_yaml, settings_from_sources
+from train.sweep.cli import main
+from train.sweep.local import Progress, run_local
+from train.sweep.plan import SweepPlan, parse_grid
+from train.sweep.report import csv_rows, summary_markdown
+from train.sweep.trial import FINAL_ROWS, run_trial
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV_OVERRIDES = {"OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
@@ -106,7 +119,6 @@ def local_sweep(tmp_path_factory):
     assert (first / "sweep_trial.json").is_file(), p.stderr.read().decode()[-3000:]
     p.stderr.close()
     before = {n: (first / n).stat().st_mtime_ns for n in ("run.json", "sweep_trial.json")}
-    from train.sweep import main
 
     assert main(args) == 0
     return out, before
@@ -130,9 +142,6 @@ def test_resumed_sweep_runs_only_the_unfinished_trial(local_sweep):
 
 
 def test_each_trial_is_an_ordinary_resumable_run_directory(local_sweep):
-    from train.checkpoint import latest_checkpoint
-    from train.settings import load_yaml, settings_from_sources
-
     out, _ = local_sweep
     trials = json.loads((out / "sweep.json").read_text())["trials"]
     for t in trials:
@@ -171,6 +180,40 @@ def test_ray_backend_gives_the_local_results(local_sweep, tmp_path):
     assert (out / "ray" / "tune" / "tuner.pkl").is_file()  # Tune's experiment, for restore
 
 
+def test_a_sweep_stopped_by_ctrl_c_resumes_to_the_uninterrupted_results(local_sweep, tmp_path):
+    """Ctrl-C while the first trial learns stops it at the end of a rollout with a checkpoint
+    (exit status 130); the sweep run again gives the results of a sweep never stopped, and
+    the stopped trial's run.json says it completed."""
+    out = tmp_path / "stopped"
+    args = [*SWEEP, "--backend", "local", "--max-concurrent", "1", "--out", str(out)]
+    args += ["--quiet", "--no-figure"]
+    first = out / "trials" / "default" / "seed_0"
+    p = subprocess.Popen(
+        [sys.executable, "-m", "train.sweep", *args],
+        cwd=ROOT,
+        env=ENV,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    try:
+        deadline = time.time() + 180
+        while time.time() < deadline and not list((first / "logs").glob("progress_*.csv")):
+            time.sleep(0.05)
+        p.send_signal(signal.SIGINT)  # learning has started: stop mid-trial
+        _, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 130, err.decode()[-3000:]
+    assert not (first / "sweep_trial.json").exists()  # stopped before its end
+    assert json.loads((first / "run.json").read_text())["status"].startswith("interrupted")
+    r = _cli(*args)
+    assert r.returncode == 0, r.stderr[-3000:]
+    assert _rows_without_wall(out / "sweep.csv") == _rows_without_wall(local_sweep[0] / "sweep.csv")
+    record = json.loads((first / "run.json").read_text())
+    assert record["status"] == "completed" and record["resumed_sessions"]
+
+
 def test_help_shows_usage_and_examples():
     r = _cli("--help", timeout=60)
     assert r.returncode == 0
@@ -179,18 +222,16 @@ def test_help_shows_usage_and_examples():
     assert "examples:" in r.stdout and "ray start --head" in r.stdout
     tomllib = pytest.importorskip("tomllib")
     scripts = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
-    assert scripts["pairflock-sweep"] == "train.sweep:main"
+    assert scripts["pairflock-sweep"] == "train.sweep.__main__:main"
 
 
 def test_dotted_keys_map_onto_run_settings():
-    from train.sweep_plan import SweepPlan, parse_grid
-
     assert parse_grid("hp.learning_rate=3e-4,1e-4") == ("hp.learning_rate", [3e-4, 1e-4])
     key, vals = parse_grid("hp.policy_kwargs.net_arch=[64,64],[128,128]")
     assert vals == [[64, 64], [128, 128]]
     plan = SweepPlan(
         base={},
-        fixed=[("eval_env.horizon", 5.0), ("frame.w_band", 0.5)],
+        fixed=[("eval_env.horizon", 5.0), ("interface.w_band", 0.5)],
         grid=[("env.n_uavs", [8, 10]), (key, vals), ("num_swarms", [4])],
         seeds=[3, 4],
         total_steps=1000,
@@ -224,8 +265,6 @@ def test_dotted_keys_map_onto_run_settings():
     ],
 )
 def test_bad_sweeps_are_named_before_anything_runs(tmp_path, capsys, args, message):
-    from train.sweep import main
-
     with pytest.raises(SystemExit) as e:
         main([*args, "--out", str(tmp_path / "x"), "--quiet"])
     err = capsys.readouterr().err
@@ -234,8 +273,6 @@ def test_bad_sweeps_are_named_before_anything_runs(tmp_path, capsys, args, messa
 
 
 def test_out_and_resume_are_protected(tmp_path, capsys):
-    from train.sweep import main
-
     (tmp_path / "busy").mkdir()
     (tmp_path / "busy" / "file").write_text("x")
     for argv, message in [
@@ -251,9 +288,6 @@ def test_out_and_resume_are_protected(tmp_path, capsys):
 
 
 def test_a_failing_worker_is_reported_and_the_others_go_on(tmp_path):
-    from train.sweep_local import Progress, run_local
-    from train.sweep_plan import SweepPlan
-
     plan = SweepPlan(base={}, fixed=[], grid=[], seeds=[0])
     (trial,) = plan.trials()
     (tmp_path / "sweep.json").write_text(json.dumps({"trials": []}))  # the worker won't find it
@@ -266,10 +300,6 @@ def test_a_failing_worker_is_reported_and_the_others_go_on(tmp_path):
 
 
 def test_iqm_and_interval_are_rliables_and_reproducible():
-    from rliable import metrics
-
-    from train.sweep_stats import iqm_ci
-
     x = np.random.default_rng(5).random((7, 3))
     global_state = np.random.get_state()[1].copy()
     point, lo, hi = iqm_ci(x, reps=300)
@@ -283,8 +313,6 @@ def test_iqm_and_interval_are_rliables_and_reproducible():
 
 
 def test_never_reached_band_is_censored_and_marked():
-    from train.sweep_stats import summary_markdown
-
     def result(seed, band):
         s = dict(
             ss_error_median=0.1, band_time_max=band, min_separation_min=2.0, peak_accel_max=40.0
@@ -316,11 +344,6 @@ def test_never_reached_band_is_censored_and_marked():
 def test_a_sweep_of_a_task_mix_reports_the_aggregate_and_every_task(tmp_path):
     """Trials of a multi-task config (train/tasks.py): final evaluation and aims per evaluation
     task plus over every task; the summary has a table per task next to the aggregate."""
-    from train.mix_eval import aggregate_score
-    from train.sweep_plan import SweepPlan
-    from train.sweep_stats import csv_rows, summary_markdown
-    from train.sweep_trial import FINAL_ROWS, run_trial
-
     base = {
         "env": {"n_uavs": 8, "pair_accel_limit": 50.0, "max_cycles": 100},
         "tasks": [{"name": "a", "num_swarms": 1}, {"name": "b", "init": "random", "num_swarms": 1}],

@@ -2,6 +2,7 @@
 GENERALIST on every evaluated (N, start), and the selection score built from them."""
 
 import math
+from types import SimpleNamespace
 
 import pytest
 
@@ -14,6 +15,12 @@ from baselines.reporting.criteria import (
     check_learned_all,
     learned_score,
 )
+
+pytest.importorskip("stable_baselines3")
+
+from train.mix.evaluation import score_function
+from train.settings import RunSettings
+from train.sweep.trial import aims
 
 
 def _rows(n, init, errs, bands, seps, peaks):
@@ -79,11 +86,8 @@ def test_learned_keeps_separation_as_an_aim_and_its_score_is_unchanged():
 
 
 def test_eval_targets_setting_is_validated_and_selects_the_score():
-    from train.mix_eval import score_function
-    from train.settings import RunSettings
-
     with pytest.raises(ValueError, match="eval_targets='strict' is invalid"):
-        RunSettings(eval_targets="strict", total_steps=64, eval_every=0).validate()
+        RunSettings(eval_targets="strict", total_steps=64, eval_every=0)
     s = RunSettings(eval_targets="generalist")
     summary = {
         "ss_error_median": 0.02,
@@ -99,9 +103,6 @@ def test_eval_targets_setting_is_validated_and_selects_the_score():
 
 
 def test_sweep_aims_judge_by_the_runs_targets():
-    from types import SimpleNamespace
-
-    from train.sweep_trial import aims
 
     cfg = SimpleNamespace(n_uavs=50, init="random")
     rows = [

@@ -6,6 +6,7 @@ import csv
 import io
 import json
 import os
+import pickle
 import shutil
 import signal
 import subprocess
@@ -13,12 +14,30 @@ import sys
 import time
 import zipfile
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from bench_scripts import load_script
 
-torch = pytest.importorskip("torch")
+from baselines import make_pair_policy
+from baselines.evaluation.rollout import rollout, trace_metrics
+from baselines.evaluation.specs import parse_value
+from pairflock_env import make_config
+
+pytest.importorskip("torch")
 pytest.importorskip("stable_baselines3")
+
+import torch
+
+import train.run as run_mod
+from train.checkpoint import latest_checkpoint, load_checkpoint_state
+from train.cli import _new_settings, build_parser, main
+from train.evaluate import cli as evaluate
+from train.evaluate.cli import _task_overrides
+from train.hyperparameters import resolve_schedules
+from train.run import train
+from train.settings import RunSettings, load_yaml, settings_from_sources
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
@@ -60,8 +79,6 @@ def _cli(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
 
 
 def _settings(**flags):
-    from train.settings import settings_from_sources
-
     base = dict(
         env={"n_uavs": 8, "pair_accel_limit": 50.0, "max_cycles": 100},
         eval_env={"horizon": 0.5},
@@ -135,9 +152,9 @@ def test_help_documents_every_cli():
         "Ctrl-C",
     ):
         assert flag in out.stdout, flag
-    for mod in ("train.evaluate", "train.throughput"):
+    for cmd in (["-m", "train.evaluate"], ["benchmarks/bench_training.py"]):
         r = subprocess.run(
-            [sys.executable, "-m", mod, "--help"],
+            [sys.executable, *cmd, "--help"],
             cwd=ROOT,
             env=ENV,
             capture_output=True,
@@ -187,9 +204,6 @@ def test_cli_smoke_run_writes_a_complete_run_directory(tmp_path):
         steps = [int(row["step"]) for row in csv.DictReader(f)]
     assert steps[0] < 128 and steps[-1] == 256  # initial policy, periodic, final
     # the saved policy plugs into the action slot and runs the baselines' rollout
-    from baselines import make_pair_policy
-    from baselines.evaluation.rollout import rollout, trace_metrics
-    from pairflock_env import make_config
 
     cfg = make_config("paper", n_uavs=8, pair_accel_limit=50.0, horizon=0.3)
     pol = make_pair_policy(f"sb3:{out / 'final_model.zip'}", cfg)
@@ -198,8 +212,6 @@ def test_cli_smoke_run_writes_a_complete_run_directory(tmp_path):
 
 
 def test_same_seed_same_training_curve_and_evaluation(tmp_path):
-    from train.run import train
-
     runs = []
     for name in ("a", "b"):
         s = _settings(seed=7, total_steps=512, eval_every=256, checkpoint_every=0)
@@ -228,9 +240,6 @@ def test_resume_continues_exactly(tmp_path, algo, tasks):
     """A run resumed from a mid-run checkpoint ends bit-identical to the uninterrupted run:
     step count, parameters, optimizer state and (SAC) replay buffer; also on two tasks, whose
     task envs are all saved and restored."""
-    from train.checkpoint import latest_checkpoint, load_checkpoint_state
-    from train.run import train
-
     total, every = (512, 256) if algo == "ppo" else (192, 96)
     s = _settings(
         algo=algo,
@@ -260,8 +269,6 @@ def test_resume_continues_exactly(tmp_path, algo, tasks):
     assert res.num_timesteps == total and res.status == "completed"
     _assert_same_params(full / "final_model.zip", part / "final_model.zip")
     if algo == "sac":
-        import pickle
-
         last = sorted((full / "checkpoints").glob("step_*"))[-1].name
         with open(full / "checkpoints" / last / "replay_buffer.pkl", "rb") as f:
             ra = pickle.load(f)
@@ -310,7 +317,6 @@ def test_ctrl_c_saves_a_checkpoint_and_exits_cleanly(tmp_path):
     rec = json.loads((out / "run.json").read_text())
     assert rec["status"].startswith("interrupted") and rec["num_timesteps"] > 0
     assert (out / "final_model.zip").is_file()
-    from train.checkpoint import latest_checkpoint
 
     ck = latest_checkpoint(out)
     assert json.loads((ck / "checkpoint.json").read_text())["num_timesteps"] == rec["num_timesteps"]
@@ -322,7 +328,7 @@ def test_ctrl_c_saves_a_checkpoint_and_exits_cleanly(tmp_path):
         (["--set", "n_uav=20"], "Did you mean 'n_uavs'"),
         (["--hp", "learning_rat=1e-3"], "Did you mean 'learning_rate'"),
         (["--set", "pair_accel_limit=-5"], "pair_accel_limit=-5"),
-        (["--frame-param", "w_error=-1"], "w_error=-1"),
+        (["--interface-param", "w_error=-1"], "w_error=-1"),
         (["--eval-baselines", "smcc"], "eval_baselines entry 'smcc'"),
         (["--hp", "seed=3"], "set by the CLI"),
         (["--hp", "learning_rate=lin_x"], "learning_rate='lin_x' is invalid"),
@@ -330,8 +336,6 @@ def test_ctrl_c_saves_a_checkpoint_and_exits_cleanly(tmp_path):
     ],
 )
 def test_bad_settings_are_named(tmp_path, capsys, args, message):
-    from train.cli import main
-
     with pytest.raises(SystemExit) as e:
         main([*args, "--out", str(tmp_path / "x")])
     err = capsys.readouterr().err
@@ -340,8 +344,6 @@ def test_bad_settings_are_named(tmp_path, capsys, args, message):
 
 
 def test_resume_refuses_changes_and_out_is_protected(tmp_path, capsys):
-    from train.cli import main
-
     (tmp_path / "full").mkdir()
     (tmp_path / "full" / "something").write_text("x")
     for argv, message in [
@@ -357,10 +359,10 @@ def test_resume_refuses_changes_and_out_is_protected(tmp_path, capsys):
 
 
 def test_throughput_script_trains_on_both_routes(tmp_path):
-    """Both routes of ``python -m train.throughput`` build, seed and train (SB3 seeds the env
-    in its constructor, which SuperSuit's ConcatVecEnv no longer supports on its own)."""
+    """Both routes of ``python benchmarks/bench_training.py`` build, seed and train (SB3 seeds
+    the env in its constructor, which SuperSuit's ConcatVecEnv no longer supports on its own)."""
     pytest.importorskip("supersuit")
-    from train.throughput import main
+    main = load_script("bench_training").main
 
     out = tmp_path / "throughput.json"
     assert (
@@ -393,8 +395,6 @@ def test_throughput_script_trains_on_both_routes(tmp_path):
 
 
 def test_linear_schedules_decay_to_zero():
-    from train.run import resolve_schedules
-
     hp = resolve_schedules({"learning_rate": "lin_3e-4", "clip_range": 0.2, "n_steps": 8})
     assert hp["learning_rate"](1.0) == 3e-4 and hp["learning_rate"](0.0) == 0.0
     assert hp["learning_rate"](0.5) == pytest.approx(1.5e-4) and hp["clip_range"] == 0.2
@@ -410,9 +410,6 @@ def _tree(run: Path) -> dict[str, tuple[bytes, int]]:
 
 
 def test_resume_of_a_finished_run_says_so_and_changes_nothing(tmp_path, capsys):
-    from train.cli import main
-    from train.run import train
-
     run = tmp_path / "done"
     res = train(_settings(total_steps=64, eval_every=0, checkpoint_every=0), run, quiet=True)
     assert res.status == "completed"
@@ -429,8 +426,6 @@ def test_resume_of_a_finished_run_says_so_and_changes_nothing(tmp_path, capsys):
 def test_ctrl_c_mid_rollout_resumes_to_the_uninterrupted_end(tmp_path, monkeypatch):
     """SIGINT in the middle of a rollout: the run stops at the next rollout boundary, and the
     resumed run ends at the same step, with the same parameters, as an uninterrupted one."""
-    import train.run as run_mod
-
     s = _settings(seed=5, total_steps=512, eval_every=128, checkpoint_every=0)
     full = run_mod.train(s, tmp_path / "full", quiet=True)
     rollout_steps = 16 * 4  # n_steps x rows (2 swarms x 2 paired UAVs)
@@ -464,12 +459,30 @@ def test_ctrl_c_mid_rollout_resumes_to_the_uninterrupted_end(tmp_path, monkeypat
     assert strip(ea) == strip(eb)  # the same evaluations at the same steps (wall time aside)
 
 
+@pytest.mark.parametrize("first_end", ["interrupted", "killed"])
+def test_run_json_says_how_a_resumed_run_ended(tmp_path, first_end):
+    """After a successful --resume, run.json says the run completed: the first session was
+    stopped (Ctrl-C: its run.json says interrupted) or killed (SIGKILL: its run.json still
+    says running, as written when learning started)."""
+    s = _settings(total_steps=128, eval_every=0, checkpoint_every=0)
+    out = tmp_path / "run"
+    stopped = train(s, out, quiet=True, interrupt=SimpleNamespace(requested=True))
+    assert stopped.interrupted
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"].startswith("interrupted")
+    if first_end == "killed":  # what a session killed while learning leaves behind
+        (out / "run.json").write_text(json.dumps({**record, "status": "running"}))
+    resumed = train(s, out, resume=out, quiet=True)
+    assert resumed.status == "completed" and resumed.num_timesteps == 128
+    record = json.loads((out / "run.json").read_text())
+    assert record["status"] == "completed" and record["num_timesteps"] == 128
+    session = json.loads((out / record["resumed_sessions"][-1]).read_text())
+    assert session["status"] == "completed" and session["resumed_from"]
+
+
 def test_values_are_read_as_written_by_the_train_cli(tmp_path):
     """``1e-3``/``5e1`` are numbers on the command line and in settings files (YAML 1.1
     alone reads them as text); one parser serves train, benchmark, quadrotor, evaluate."""
-    from baselines.evaluation.specs import parse_value
-    from train.cli import _new_settings, build_parser
-
     parser = build_parser()
     args = parser.parse_args(
         [
@@ -494,7 +507,6 @@ def test_values_are_read_as_written_by_the_train_cli(tmp_path):
     assert s.hyperparameters["policy_kwargs"] == {"net_arch": [8, 8]}
     cfg = tmp_path / "c.yaml"
     cfg.write_text("hyperparameters: {learning_rate: 1e-3}\nenv: {pair_accel_limit: 5e1}\n")
-    from train.settings import load_yaml
 
     assert load_yaml(cfg) == {
         "hyperparameters": {"learning_rate": 1e-3},
@@ -510,32 +522,25 @@ def test_values_are_read_as_written_by_the_train_cli(tmp_path):
         None,
     ]
     # ... and the SB3 model gets a float learning rate (this crashed as the text '1e-3')
-    from train.run import train
 
     flags = {"hyperparameters": {**s.hyperparameters, "policy_kwargs": {"net_arch": [8]}}}
     small = _settings(total_steps=64, eval_every=0, checkpoint_every=0, **flags)
     assert train(small, tmp_path / "lr", quiet=True).status == "completed"
 
 
-def test_old_interface_names_still_load(tmp_path):
-    """``frame``/``frame_params`` (settings files, RunSettings, --frame-param) are the old
-    names of ``interface``/``interface_params``; the committed model's metadata loads."""
-    from train.evaluate import _task_overrides
-    from train.settings import RunSettings, load_yaml, settings_from_sources
-
+def test_only_stored_settings_keep_the_old_interface_names(tmp_path):
+    """``frame``/``frame_params``, the old names of ``interface``/``interface_params``, load
+    from stored data only (the committed models' metadata, through pairflock_env.compat);
+    settings files, keywords and flags take the current names."""
     old = tmp_path / "old.yaml"
     old.write_text("frame: pair\nframe_params: {w_band: 0.2}\nenv: {n_uavs: 8}\n")
-    with pytest.warns(FutureWarning) as notes:
-        data = load_yaml(old)
-    assert {"'frame' is deprecated", "'frame_params' is deprecated"} <= {
-        str(n.message).split(": ", 1)[1].split(";")[0] for n in notes
-    }
-    assert data["interface"] == "pair" and data["interface_params"] == {"w_band": 0.2}
-    s = settings_from_sources(data, {"eval_baselines": []})
-    assert s.interface_params == {"w_band": 0.2}
-    with pytest.warns(DeprecationWarning, match="frame"):
-        assert RunSettings(frame="world").interface == "world"
-    with pytest.raises(ValueError, match="same setting"):
+    with pytest.raises(ValueError, match="unknown key 'frame'"):
+        load_yaml(old)
+    with pytest.raises(TypeError, match="'frame'"):
+        RunSettings(frame="world")
+    stored = RunSettings.from_dict({"frame": "world", "frame_params": {}, "eval_baselines": []})
+    assert stored.interface == "world" and "frame" not in stored.to_dict()
+    with pytest.raises(ValueError, match="both 'frame'"):
         RunSettings.from_dict({"frame": "pair", "interface": "world"})
     preset, over = _task_overrides(ROOT / "models" / "pair_n20_a50.zip")
     assert preset == "paper" and over["pair_accel_limit"] == 50.0
@@ -544,8 +549,6 @@ def test_old_interface_names_still_load(tmp_path):
 def test_evaluate_baselines_take_gains_and_limits(capsys):
     """``train.evaluate --baselines NAME[:GAINS][@LIMIT]``: accepted as the benchmark's
     specs, and a bad name, gain or limit stops the CLI naming the entry."""
-    from train import evaluate
-
     parser = evaluate.build_parser()
     good = ["braking:detour=80", "smc@1000", "braking:k=10,detour=60@40"]
     args = parser.parse_args(["pair_n20_a50", "--baselines", *good])

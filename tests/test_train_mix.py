@@ -10,9 +10,24 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from bench_scripts import load_script
+from view_helpers import snapshot
+
+from baselines.reporting.criteria import learned_score
 
 pytest.importorskip("torch")
 pytest.importorskip("stable_baselines3")
+
+from stable_baselines3.common.logger import Logger
+
+from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
+from train.callbacks import EvalCallback, eval_score, summarize_metrics
+from train.cli import main
+from train.mix.env import TaskMixVecEnv, task_seeds
+from train.mix.evaluation import score_function, summarize_tasks
+from train.mix.tasks import evaluation_tasks, training_tasks
+from train.run import train
+from train.settings import settings_from_sources
 
 #: two small tasks whose episodes end at different decisions (4 and 6 of 5 control steps)
 TASK_A = {"n_uavs": 6, "init": "corners", "max_cycles": 20}
@@ -20,8 +35,6 @@ TASK_B = {"n_uavs": 8, "init": "random", "max_cycles": 30}
 
 
 def _settings(**flags):
-    from train.settings import settings_from_sources
-
     base = dict(
         env={"pair_accel_limit": 50.0, "max_cycles": 100},
         tasks=[{"n_uavs": 6, "num_swarms": 2}, {"n_uavs": 8, "init": "random", "num_swarms": 1}],
@@ -86,8 +99,6 @@ def test_mismatch_says_what_must_be_shared():
 
 
 def test_the_cli_names_a_bad_task_of_a_config_file(tmp_path, capsys):
-    from train.cli import main
-
     cfg = tmp_path / "mix.yaml"
     cfg.write_text("tasks:\n  - {n_uavs: 6}\n  - {n_uavs: 8, obs_neighbors: 3}\n")
     with pytest.raises(SystemExit) as e:
@@ -97,8 +108,6 @@ def test_the_cli_names_a_bad_task_of_a_config_file(tmp_path, capsys):
 
 
 def test_tasks_resolve_on_the_shared_env_and_single_task_settings_stay_as_they_were():
-    from train.tasks import evaluation_tasks, training_tasks
-
     s = _settings(eval_env={"horizon": 0.3, "init": "corners"})
     a, b = training_tasks(s)
     assert (a.name, a.num_swarms, b.name, b.num_swarms) == ("n6_corners", 2, "n8_random", 1)
@@ -115,8 +124,6 @@ def test_tasks_resolve_on_the_shared_env_and_single_task_settings_stay_as_they_w
     one = _settings(tasks=None)
     assert not {"tasks", "eval_tasks", "eval_aggregate"} & set(one.to_dict())
     assert training_tasks(one) is None and evaluation_tasks(one)[0].name == ""
-    from train.callbacks import eval_score
-    from train.mix_eval import score_function
 
     assert score_function(one) is eval_score
     # one training task, selected on several
@@ -130,8 +137,6 @@ def test_tasks_resolve_on_the_shared_env_and_single_task_settings_stay_as_they_w
 
 # --------------------------------------------------------------------------- the VecEnv
 def _task_env(seed, **cfg):
-    from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
-
     n = cfg.pop("num_swarms", 2)
     return PairFlockSB3VecEnv(
         "paper", num_swarms=n, seed=seed, pair_accel_limit=50.0, info_keys="all", **cfg
@@ -139,8 +144,6 @@ def _task_env(seed, **cfg):
 
 
 def _mix_and_separate(seed=7):
-    from train.mix_env import TaskMixVecEnv, task_seeds
-
     mix = TaskMixVecEnv([_task_env(0, **TASK_A), _task_env(0, **TASK_B)], ["a", "b"])
     sep = [_task_env(0, **TASK_A), _task_env(0, **TASK_B)]
     mix.seed(seed)
@@ -203,7 +206,6 @@ def test_attributes_state_and_bad_actions_delegate_by_row_range():
     for x, y in zip(first[:3], again[:3], strict=True):
         assert np.array_equal(x, y)
     other = _task_env(0, **TASK_A)
-    from train.mix_env import TaskMixVecEnv
 
     with pytest.raises(ValueError, match="state of task 1"):
         TaskMixVecEnv([_task_env(0, **TASK_A), other], ["a", "b"]).set_state(state)
@@ -212,8 +214,6 @@ def test_attributes_state_and_bad_actions_delegate_by_row_range():
 
 
 def test_rejected_seeds_and_options_change_no_task_and_name_the_task():
-    from view_helpers import snapshot
-
     mix, _ = _mix_and_separate()
     mix.seed(0)
     mix.reset()
@@ -233,8 +233,6 @@ def test_rejected_seeds_and_options_change_no_task_and_name_the_task():
 
 
 def test_each_task_draws_from_its_own_seed_stream():
-    from train.mix_env import TaskMixVecEnv
-
     twins = [dict(n_uavs=6, init="random", num_swarms=2) for _ in range(2)]
     mix = TaskMixVecEnv([_task_env(0, **c) for c in twins])
     global_state = np.random.get_state()[1].copy()
@@ -266,13 +264,8 @@ def _summary(scores):
 
 @pytest.mark.parametrize("how, best", [("worst", 1), ("sum", 0)])
 def test_best_model_is_chosen_on_the_aggregate_of_the_task_scores(how, best):
-    from stable_baselines3.common.logger import Logger
-
-    from train.callbacks import EvalCallback
-    from train.mix_eval import score_function
-
     s = _settings(eval_tasks=[{"n_uavs": 6, "name": "t0"}, {"n_uavs": 8, "name": "t1"}])
-    s.eval_aggregate = how
+    s = s.replace(eval_aggregate=how)
     scripted = iter([_summary([0.1, 5.0]), _summary([3.0, 3.0])])  # sum: first; worst: second
     kept = []
     cb = EvalCallback(
@@ -292,10 +285,6 @@ def test_best_model_is_chosen_on_the_aggregate_of_the_task_scores(how, best):
 
 
 def test_summary_per_task_and_worst_task_aggregate():
-    from baselines.reporting.criteria import learned_score
-    from train.callbacks import summarize_metrics
-    from train.mix_eval import summarize_tasks
-
     def row(err, band, sep):
         keys = ("ss_mean_error", "ss_max_error", "band_time", "min_pair_separation", "peak_accel")
         return dict(zip(keys, (err, err, band, sep, 40.0), strict=True))
@@ -311,8 +300,6 @@ def test_summary_per_task_and_worst_task_aggregate():
 
 
 def test_two_task_training_logs_every_eval_task_and_keeps_the_best(tmp_path):
-    from train.run import train
-
     s = _settings(
         eval_tasks=[{"n_uavs": 6, "name": "small"}, {"n_uavs": 10, "init": "random"}],
         eval_baselines=["smc"],
@@ -342,8 +329,8 @@ def test_two_task_training_logs_every_eval_task_and_keeps_the_best(tmp_path):
 
 
 def test_throughput_measures_run_configs_and_estimates_the_run(tmp_path):
-    from train.config_speed import estimate_run_s
-    from train.throughput import main
+    bench = load_script("bench_training")
+    estimate_run_s, main = bench.estimate_run_s, bench.main
 
     cfg = tmp_path / "mix.yaml"
     cfg.write_text(

@@ -1,11 +1,20 @@
-"""``python -m train``: see :mod:`train.cli`."""
+"""``python -m train`` / ``pairflock-train``:
+train a pair policy (:mod:`train.cli`),
+on one thread per process."""
 
 import sys
+from collections.abc import Sequence
 
-from baselines.evaluation.parallel import pin_threads
+from baselines.runtime.threads import pin_threads
 
-pin_threads()  # before numpy and torch load
 
-from train.cli import main  # noqa: E402
+def main(argv: Sequence[str] | None = None) -> int:
+    """Pin the threads, then run the command; returns the exit status."""
+    pin_threads()  # before numpy and torch load
+    from train.cli import main as run
 
-sys.exit(main())
+    return run(argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import math
 import signal
+import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -19,6 +21,7 @@ from typing import Any
 
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
+from tqdm import tqdm
 
 from baselines.reporting.criteria import learned_score
 
@@ -71,8 +74,6 @@ class GracefulInterrupt:
         self._previous: Any = None
 
     def __enter__(self) -> GracefulInterrupt:
-        import threading
-
         if threading.current_thread() is threading.main_thread():
             self._previous = signal.getsignal(signal.SIGINT)
             signal.signal(signal.SIGINT, self._handle)
@@ -132,9 +133,6 @@ class ProgressCallback(BaseCallback):
         self.postfix: dict[str, str] = {}
 
     def _on_training_start(self) -> None:
-        import sys
-
-        from tqdm import tqdm
 
         interval = 0.2 if sys.stderr.isatty() else 30.0  # log files get a line every 30 s
         self.bar = tqdm(

@@ -24,6 +24,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import torch
+from stable_baselines3.common.vec_env import VecMonitor
+
+from baselines.runtime.files import atomic_write_text, write_json
 
 __all__ = [
     "latest_checkpoint",
@@ -36,8 +40,6 @@ __all__ = [
 
 
 def rng_state(model: Any) -> dict[str, Any]:
-    import torch
-
     return {
         "torch": torch.get_rng_state(),
         "numpy": np.random.get_state(),
@@ -47,8 +49,6 @@ def rng_state(model: Any) -> dict[str, Any]:
 
 
 def set_rng_state(model: Any, state: dict[str, Any]) -> None:
-    import torch
-
     torch.set_rng_state(state["torch"])
     np.random.set_state(state["numpy"])
     random.setstate(state["python"])
@@ -58,8 +58,6 @@ def set_rng_state(model: Any, state: dict[str, Any]) -> None:
 def save_checkpoint(root: Path, model: Any, venv: Any, extra: dict[str, Any], keep: int) -> Path:
     """Write checkpoint ``root/step_<N>`` (N = model.num_timesteps) atomically; keep the
     newest ``keep`` checkpoints (0 keeps all)."""
-    from baselines.evaluation.io import atomic_write_text, write_json
-
     root = Path(root)
     root.mkdir(parents=True, exist_ok=True)
     step = int(model.num_timesteps)
@@ -106,8 +104,6 @@ def save_checkpoint(root: Path, model: Any, venv: Any, extra: dict[str, Any], ke
 
 
 def _find_monitor(venv: Any) -> Any:
-    from stable_baselines3.common.vec_env import VecMonitor
-
     v = venv
     while v is not None:
         if isinstance(v, VecMonitor):

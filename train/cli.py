@@ -13,6 +13,15 @@ import textwrap
 from collections.abc import Sequence
 from pathlib import Path
 
+from baselines.evaluation.specs import parse_assignment
+from baselines.runtime.cli import ArgumentParser, int_like, user_errors
+from train.callbacks import GracefulInterrupt
+from train.checkpoint import latest_checkpoint
+from train.hyperparameters import ALGOS
+from train.mix.tasks import evaluation_tasks, is_mix
+from train.run import ALREADY_COMPLETE, train
+from train.settings import load_yaml, settings_from_sources, settings_help
+
 __all__ = ["build_parser", "main"]
 
 EPILOG = textwrap.dedent(
@@ -20,7 +29,8 @@ EPILOG = textwrap.dedent(
     files written to --out:
       settings.yaml          effective settings (rerun with --config <out>/settings.yaml)
       run.json               config, interface, seed, package versions, git commit, status,
-                             timing, final evaluation (run_resumed_<N>.json after --resume)
+                             timing, final evaluation; a resumed session writes its own
+                             run_resumed_<N>.json and updates the status in run.json
       eval.csv               periodic evaluation of the policy (step, summary over seeds)
       eval_baselines.json    the analytic controllers on the same seeds (computed once)
       logs/progress_*.csv    SB3 training log; tensorboard/ for `tensorboard --logdir <out>`
@@ -47,17 +57,6 @@ EPILOG = textwrap.dedent(
 )
 
 
-def _int_like(text: str) -> int:
-    """Integers, also written as 2e7 or 20_000_000."""
-    try:
-        v = float(text.replace("_", ""))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
-    if not v.is_integer():
-        raise argparse.ArgumentTypeError(f"{text!r} is not an integer")
-    return int(v)
-
-
 def _seed_list(text: str) -> list[int]:
     """``1000-1009`` or ``1,2,5``."""
     try:
@@ -75,8 +74,6 @@ def _seed_list(text: str) -> list[int]:
 
 
 def _task_options(p: argparse.ArgumentParser) -> None:
-    from train.settings import ALGOS
-
     g = p.add_argument_group("task")
     g.add_argument(
         "--config",
@@ -113,21 +110,16 @@ def _task_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("learning interface")
     g.add_argument(
         "--interface",
-        "--frame",
-        dest="interface",
         choices=("pair", "world"),
-        help="what the policy sees and outputs (default: pair; see pairflock_env.interfaces; "
-        "--frame is the old name)",
+        help="what the policy sees and outputs (default: pair; see pairflock_env.interfaces)",
     )
     g.add_argument(
         "--interface-param",
-        "--frame-param",
         dest="interface_sets",
         action="append",
         default=[],
         metavar="NAME=VALUE",
-        help="PairInterfaceParams field, repeatable (e.g. --interface-param w_separation=2; "
-        "--frame-param is the old name)",
+        help="PairInterfaceParams field, repeatable (e.g. --interface-param w_separation=2)",
     )
 
 
@@ -135,7 +127,7 @@ def _algorithm_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("algorithm")
     g.add_argument(
         "--total-steps",
-        type=_int_like,
+        type=int_like,
         help="environment steps (rows x vector steps) to train for, e.g. 2e7",
     )
     g.add_argument("--seed", type=int, help="seed of the model, the swarms and SB3 (default: 0)")
@@ -161,7 +153,7 @@ def _schedule_options(p: argparse.ArgumentParser) -> None:
         help="continue a run: its directory or a checkpoints/step_<N> directory; "
         "only --total-steps, --time-limit and --quiet may change",
     )
-    g.add_argument("--eval-every", type=_int_like, help="steps between evaluations (0: none)")
+    g.add_argument("--eval-every", type=int_like, help="steps between evaluations (0: none)")
     g.add_argument(
         "--eval-seeds",
         type=_seed_list,
@@ -174,7 +166,7 @@ def _schedule_options(p: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="analytic controllers evaluated once for comparison (default: smc proportional)",
     )
-    g.add_argument("--checkpoint-every", type=_int_like, help="steps between checkpoints (0: none)")
+    g.add_argument("--checkpoint-every", type=int_like, help="steps between checkpoints (0: none)")
     g.add_argument("--keep-checkpoints", type=int, help="newest checkpoints kept (0: all)")
     g.add_argument(
         "--time-limit",
@@ -188,11 +180,13 @@ def _schedule_options(p: argparse.ArgumentParser) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     """The training CLI's argument parser."""
-    p = argparse.ArgumentParser(
+    p = ArgumentParser(
         prog="python -m train",
         description="Train a policy for the pairflock pair action slot with stable-baselines3 "
         "(PPO, SAC, TD3) on the native batched VecEnv, one row per paired UAV.",
-        epilog=EPILOG,
+        epilog=EPILOG
+        + "\nsettings (the keys of --config files and of <out>/settings.yaml; flags set them "
+        "too):\n" + settings_help(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     _task_options(p)
@@ -202,8 +196,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _parse_sets(items: list[str], flag: str):
-    from train.settings import parse_assignment
-
     return [parse_assignment(t, flag) for t in items]
 
 
@@ -211,17 +203,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """``python -m train`` / ``pairflock-train``; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    from baselines.evaluation.parallel import pin_threads
-
-    pin_threads(load_torch=True)
-    from train.callbacks import GracefulInterrupt
-
-    try:
-        with GracefulInterrupt() as interrupt:
-            return _main(args, parser, interrupt)
-    except (ValueError, TypeError, FileNotFoundError, FileExistsError) as e:
-        parser.exit(2, f"{parser.prog}: error: {e}\n")
-    return 2  # pragma: no cover
+    with user_errors(parser), GracefulInterrupt() as interrupt:
+        return _main(args, parser, interrupt)
 
 
 #: options a resumed run may not change (it continues as it was set up)
@@ -243,9 +226,6 @@ _FIXED_ON_RESUME = (
 
 def _resume_settings(args: argparse.Namespace):
     """(settings, run directory) of ``--resume``."""
-    from train.checkpoint import latest_checkpoint
-    from train.settings import load_yaml, settings_from_sources
-
     changing = [name for name in _FIXED_ON_RESUME if getattr(args, name) is not None]
     changing += [
         f for f in ("env_sets", "eval_sets", "interface_sets", "hp_sets") if getattr(args, f)
@@ -266,8 +246,6 @@ def _resume_settings(args: argparse.Namespace):
 
 def _new_settings(args: argparse.Namespace, parser: argparse.ArgumentParser):
     """Settings of a new run: defaults < ``--config`` < flags < assignments."""
-    from train.settings import load_yaml, settings_from_sources
-
     if args.out is None:
         parser.error("--out is required (or --resume RUN_DIR)")
     data = load_yaml(args.config) if args.config is not None else None
@@ -300,8 +278,6 @@ def _new_settings(args: argparse.Namespace, parser: argparse.ArgumentParser):
 
 
 def _message(result, settings, out) -> str:
-    from train.run import ALREADY_COMPLETE
-
     if result.status == ALREADY_COMPLETE:
         return (
             f"{out} is complete: {result.num_timesteps} steps of {settings.total_steps}; "
@@ -310,8 +286,6 @@ def _message(result, settings, out) -> str:
     s = result.final_summary
     msg = f"{result.status}: {result.num_timesteps} steps in {result.wall_s / 60:.1f} min -> {out}"
     if s:
-        from train.tasks import evaluation_tasks, is_mix
-
         tasks = f" (worst of {len(evaluation_tasks(settings))} tasks)" if is_mix(settings) else ""
         msg += (
             f"\nevaluation on seeds {settings.eval_seeds[0]}-{settings.eval_seeds[-1]}{tasks}: "
@@ -323,8 +297,6 @@ def _message(result, settings, out) -> str:
 
 
 def _main(args: argparse.Namespace, parser: argparse.ArgumentParser, interrupt) -> int:
-    from train.run import train
-
     if args.resume is not None:
         settings, out = _resume_settings(args)
     else:

@@ -1,4 +1,4 @@
-"""The SB3 model of a run: hyperparameter schedules, construction, loading, saving."""
+"""The SB3 model of a run: construction (with a warm start), loading, metadata, saving."""
 
 from __future__ import annotations
 
@@ -7,87 +7,42 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import stable_baselines3 as sb3
+from stable_baselines3.common.noise import NormalActionNoise
+from stable_baselines3.common.save_util import load_from_zip_file
 
 from baselines.controllers.sb3 import METADATA_KEY
+from baselines.controllers.zoo import resolve_model
+from train.hyperparameters import resolve_schedules
 from train.settings import RunSettings
 
 __all__ = [
     "METADATA_KEY",
     "build_model",
-    "init_model_path",
-    "linear_schedule",
     "load_model",
     "metadata",
-    "resolve_schedules",
     "save_model_atomic",
     "warm_start",
 ]
 
 
-def linear_schedule(start: float):
-    """SB3 schedule falling linearly from ``start`` to 0 over training (rl-zoo's ``lin_<v>``)."""
-
-    def schedule(progress_remaining: float) -> float:
-        return progress_remaining * start
-
-    schedule.start = start  # type: ignore[attr-defined]
-    return schedule
-
-
-def resolve_schedules(hp: dict[str, Any]) -> dict[str, Any]:
-    """``"lin_3e-4"`` for learning_rate / clip_range means a linear decay from 3e-4 to 0."""
-    out = dict(hp)
-    for key in ("learning_rate", "clip_range"):
-        v = out.get(key)
-        if isinstance(v, str) and v.startswith("lin_"):
-            try:
-                start = float(v[4:])
-            except ValueError:
-                raise ValueError(
-                    f"hyperparameter {key}={v!r} is invalid: use lin_<number>"
-                ) from None
-            if start <= 0:
-                raise ValueError(f"hyperparameter {key}={v!r} is invalid: the start must be > 0")
-            out[key] = linear_schedule(start)
-    return out
-
-
 def build_model(settings: RunSettings, venv: Any) -> Any:
     """A fresh SB3 model of the run's algorithm and hyperparameters, seeded by the run."""
-    import stable_baselines3 as sb3
-
     hp = resolve_schedules(settings.algo_hyperparameters())
     cls = getattr(sb3, settings.algo.upper())
     if settings.algo == "td3":
-        from stable_baselines3.common.noise import NormalActionNoise
-
         std = float(hp.pop("action_noise_std"))
         D = venv.action_space.shape[0]
         hp["action_noise"] = NormalActionNoise(np.zeros(D), std * np.ones(D))
     model = cls("MlpPolicy", venv, seed=settings.seed, device="cpu", verbose=0, **hp)
     if settings.init_model is not None:
-        warm_start(model, init_model_path(settings.init_model))
+        warm_start(model, resolve_model(settings.init_model))
     return model
-
-
-def init_model_path(value: Any) -> Path:
-    """The model file of the ``init_model`` setting (a zip path or a packaged policy's name);
-    ``TypeError`` / ``ValueError`` naming the setting otherwise."""
-    from baselines.controllers.zoo import resolve_model
-
-    if not isinstance(value, (str, Path)):
-        raise TypeError(f"init_model={value!r} is invalid: must be a path or a model name")
-    try:
-        return resolve_model(value)
-    except FileNotFoundError as e:
-        raise ValueError(f"init_model={value!r} is invalid: {e}") from None
 
 
 def warm_start(model: Any, path: Path) -> None:
     """Copy the weights (and optimizer state) of the model saved at ``path`` into ``model``;
     the spaces must be the same (``ValueError`` naming both otherwise)."""
-    from stable_baselines3.common.save_util import load_from_zip_file
-
     data, params, _ = load_from_zip_file(path, device="cpu")
     for space in ("observation_space", "action_space"):
         if data.get(space) != getattr(model, space):
@@ -100,8 +55,6 @@ def warm_start(model: Any, path: Path) -> None:
 
 def load_model(settings: RunSettings, ckpt: Path, venv: Any) -> Any:
     """The model of checkpoint ``ckpt`` on ``venv`` (with its replay buffer, if any)."""
-    import stable_baselines3 as sb3
-
     cls = getattr(sb3, settings.algo.upper())
     # force_reset=False keeps the saved last observation: the env continues, not resets
     model = cls.load(str(ckpt / "model.zip"), env=venv, device="cpu", force_reset=False)

@@ -19,23 +19,52 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
+from stable_baselines3.common.logger import CSVOutputFormat, Logger, TensorBoardOutputFormat
+from stable_baselines3.common.vec_env import VecMonitor
 
-from baselines.evaluation.parallel import pin_threads
-from train.model import METADATA_KEY, linear_schedule, resolve_schedules
+from baselines import make_pair_policy
+from baselines.controllers.sb3 import SB3PairPolicy
+from baselines.evaluation.rollout import rollout, trace_metrics
+from baselines.reporting.criteria import TARGETS
+from baselines.runtime.files import atomic_write_text, write_csv, write_json
+from baselines.runtime.record import run_record
+from baselines.runtime.threads import pin_threads
+from pairflock_env import make_config
+from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
+from train.callbacks import (
+    CheckpointCallback,
+    EvalCallback,
+    GracefulInterrupt,
+    ProgressCallback,
+    StopCallback,
+    StopTraining,
+)
+from train.checkpoint import (
+    latest_checkpoint,
+    load_checkpoint_state,
+    restore_monitor,
+    save_checkpoint,
+    set_rng_state,
+)
+from train.mix.env import make_mix_vec_env
+from train.mix.evaluation import score_function, summarize_tasks, tagged_rows
+from train.mix.tasks import evaluation_tasks, is_mix, training_tasks
+from train.model import METADATA_KEY, build_model, load_model, metadata, save_model_atomic
 from train.settings import RunSettings
 
 __all__ = [
-    "METADATA_KEY",
+    "ALREADY_COMPLETE",
     "RunResult",
     "evaluate_model",
     "evaluate_policy_rows",
-    "linear_schedule",
     "make_vec_env",
-    "resolve_schedules",
     "train",
 ]
 
 FINAL_MODEL = "final_model.zip"
+#: the run's record; a resumed session writes its own (run_resumed_<steps>.json) and updates it
+RUN_RECORD = "run.json"
 BEST_MODEL = "best_model.zip"
 #: status of a resumed run that had already reached its step target (nothing is changed)
 ALREADY_COMPLETE = "already complete"
@@ -58,13 +87,8 @@ class RunResult:
 
 def make_vec_env(settings: RunSettings, seed_offset: int = 0):
     """The native SB3 VecEnv of the training task, wrapped in a VecMonitor."""
-    from stable_baselines3.common.vec_env import VecMonitor
-
-    from pairflock_env.envs.sb3 import PairFlockSB3VecEnv
 
     if settings.tasks is not None:  # a mix: one task env per task, rows concatenated
-        from train.mix_env import make_mix_vec_env
-
         return VecMonitor(make_mix_vec_env(settings, seed_offset))
     ss = np.random.SeedSequence([settings.seed, seed_offset])
     env = PairFlockSB3VecEnv(
@@ -79,17 +103,12 @@ def make_vec_env(settings: RunSettings, seed_offset: int = 0):
 
 def evaluate_policy_rows(policy: Any, cfg: Any, seeds: list[int]) -> list[dict[str, Any]]:
     """Metrics per seed of ``policy`` on ``cfg`` with the baselines' rollout code."""
-    from baselines.evaluation.rollout import rollout, trace_metrics
-
     return trace_metrics(rollout(cfg, policy, seeds))
 
 
 def evaluate_model(model: Any, interface: Any, eval_cfgs, seeds, targets):
     """A model's evaluation as a run selects by: rows per task (``eval_cfgs``: task name ->
     config) on ``seeds``, and their summary (:func:`train.mix_eval.summarize_tasks`)."""
-    from baselines.controllers.sb3 import SB3PairPolicy
-    from train.mix_eval import summarize_tasks
-
     iface = interface.to_dict()
     by_task = {
         task: evaluate_policy_rows(SB3PairPolicy(model, cfg, iface), cfg, list(seeds))
@@ -99,9 +118,6 @@ def evaluate_model(model: Any, interface: Any, eval_cfgs, seeds, targets):
 
 
 def _write_settings(out: Path, settings: RunSettings) -> None:
-    import yaml
-
-    from baselines.evaluation.io import atomic_write_text
 
     text = yaml.safe_dump(settings.to_dict(), sort_keys=False, default_flow_style=None)
     atomic_write_text(out / "settings.yaml", text)
@@ -129,9 +145,6 @@ class _Session:
     them (the order of random draws is part of the bit-for-bit determinism)."""
 
     def __init__(self, settings: RunSettings, out: Path, ckpt: Path | None, state, quiet: bool):
-        from pairflock_env import make_config
-        from train.tasks import evaluation_tasks, training_tasks
-
         self.settings, self.out, self.ckpt, self.state, self.quiet = (
             settings,
             out,
@@ -151,7 +164,6 @@ class _Session:
         #: evaluation configs by task name (one task: the name "")
         self.eval_cfgs = {t.name: t.config(settings.preset) for t in evaluation_tasks(settings)}
         self.eval_cfg = next(iter(self.eval_cfgs.values()))
-        from baselines.reporting.criteria import TARGETS
 
         #: the targets each evaluation task is scored by (the ``eval_targets`` setting)
         self.targets = TARGETS[settings.eval_targets]
@@ -164,9 +176,6 @@ class _Session:
 
     # ------------------------------------------------------------------ env and model
     def build_model(self) -> None:
-        from train.checkpoint import restore_monitor, set_rng_state
-        from train.model import build_model, load_model, metadata
-
         self.venv = make_vec_env(self.settings)
         self.interface = self.venv.unwrapped.interface
         if self.state is None:
@@ -180,8 +189,6 @@ class _Session:
         self.start_steps = int(self.model.num_timesteps)
 
     def set_logger(self) -> None:
-        from stable_baselines3.common.logger import CSVOutputFormat, Logger, TensorBoardOutputFormat
-
         logs = self.out / "logs"
         logs.mkdir(exist_ok=True)
         formats = [CSVOutputFormat(str(logs / f"progress_from_{self.start_steps:012d}.csv"))]
@@ -192,10 +199,6 @@ class _Session:
     # ------------------------------------------------------------------ evaluation
     def baseline_summaries(self) -> dict[str, dict[str, float]]:
         """The analytic controllers on the evaluation seeds, computed once per run."""
-        from baselines import make_pair_policy
-        from baselines.evaluation.io import write_json
-        from train.mix_eval import summarize_tasks, tagged_rows
-
         path, s = self.out / "eval_baselines.json", self.settings
         if self.state is not None and path.is_file():
             return json.loads(path.read_text(encoding="utf-8"))["summary"]
@@ -211,17 +214,12 @@ class _Session:
         return summaries
 
     def evaluate(self):
-        from train.mix_eval import tagged_rows
-
         by_task, summary = evaluate_model(
             self.model, self.interface, self.eval_cfgs, self.settings.eval_seeds, self.targets
         )
         return tagged_rows(by_task), summary
 
     def on_result(self, step: int, rows, summary, improved: bool) -> None:
-        from baselines.evaluation.io import write_csv, write_json
-        from train.model import save_model_atomic
-
         self.history.append({"step": step, "wall_s": round(self.wall(), 1), **summary})
         columns = list(dict.fromkeys(k for r in self.history for k in r))
         write_csv(self.out / "eval.csv", self.history, columns)
@@ -232,9 +230,6 @@ class _Session:
 
     # ------------------------------------------------------------------ callbacks
     def make_callbacks(self, baselines: dict[str, dict[str, float]]) -> None:
-        from train.callbacks import CheckpointCallback, EvalCallback, ProgressCallback
-        from train.mix_eval import score_function
-
         s, st = self.settings, self.state
         self.progress = ProgressCallback(s.total_steps, disable=self.quiet)
         # a new run evaluates its initial policy first; a resumed one keeps its schedule
@@ -252,8 +247,6 @@ class _Session:
         self.checkpointer = CheckpointCallback(self.save, s.checkpoint_every, next_save=next_save)
 
     def save(self, step: int) -> Path:
-        from train.checkpoint import save_checkpoint
-
         extra = {
             "history": self.history,
             "next_eval": self.evaluator.next_eval,
@@ -267,9 +260,6 @@ class _Session:
 
     # ------------------------------------------------------------------ learning
     def start_record(self) -> None:
-        from baselines.evaluation.io import run_record, write_json
-        from train.tasks import is_mix
-
         mix = {}
         if is_mix(self.settings):  # every task's config (the first is "config" too)
             mix = {
@@ -288,14 +278,12 @@ class _Session:
             **mix,
         )
         resumed = f"run_resumed_{self.start_steps:012d}.json"
-        self.record_name = "run.json" if self.state is None else resumed
+        self.record_name = RUN_RECORD if self.state is None else resumed
         write_json(self.out / self.record_name, self.record)
 
     def learn(self, interrupt: Any) -> str:
         """Learn to the step target; a stop (Ctrl-C, time limit) ends at a rollout boundary,
         where the checkpoint written next resumes exactly."""
-        from train.callbacks import GracefulInterrupt, StopCallback, StopTraining
-
         s = self.settings
         time_limit = None if s.time_limit is None else s.time_limit * 60.0 - self.wall_before
         guard = GracefulInterrupt() if interrupt is None else contextlib.nullcontext(interrupt)
@@ -314,9 +302,6 @@ class _Session:
 
     def finish(self, status: str, baselines) -> RunResult:
         """Final checkpoint, model and evaluation (also after Ctrl-C: nothing is lost)."""
-        from baselines.evaluation.io import write_json
-        from train.model import save_model_atomic
-
         model = self.model
         ck = self.save(model.num_timesteps)
         save_model_atomic(model, self.out / FINAL_MODEL)
@@ -338,15 +323,29 @@ class _Session:
             baselines=baselines,
         )
         write_json(self.out / self.record_name, self.record)
+        if self.record_name != RUN_RECORD:
+            self._update_run_record()
         self.venv.close()
         return RunResult(self.out, int(model.num_timesteps), status, self.wall(), final_summary)
+
+    def _update_run_record(self) -> None:
+        """After a resumed session, ``run.json`` says how the run stands now (its status,
+        steps, time, last checkpoint and final evaluation) and names the session records;
+        the first session's configuration stays as it was."""
+        path = self.out / RUN_RECORD
+        try:
+            run = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):  # no readable record of the first session
+            return
+        for key in ("status", "num_timesteps", "wall_s", "last_checkpoint", "final_summary"):
+            run[key] = self.record[key]
+        run["resumed_sessions"] = [*run.get("resumed_sessions", []), self.record_name]
+        write_json(path, run)
 
 
 def _open(settings: RunSettings, out: Path, resume: Path | None, overwrite: bool):
     """(checkpoint, its state) to resume from, or (None, None) for a new run in a fresh
     ``out``; a resumed run that has reached its target gives a :class:`RunResult`."""
-    from train.checkpoint import latest_checkpoint, load_checkpoint_state
-
     if resume is None:
         _prepare_dir(out, overwrite)
         return None, None, None
@@ -378,7 +377,7 @@ def train(
     default one is installed around learning. A stop (Ctrl-C, time limit) takes effect at
     the end of the current rollout, so the run resumes exactly where it stopped.
     """
-    pin_threads(load_torch=True)
+    pin_threads()
     out = Path(out)
     ckpt, state, done = _open(settings, out, resume, overwrite)
     if done is not None:

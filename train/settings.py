@@ -1,13 +1,20 @@
-"""Everything a training run is built from, in one validated structure.
+"""Everything a training run is built from: :class:`RunSettings`, one frozen, validated record.
 
-A run is described by :class:`RunSettings`: the task (preset, dynamics, config overrides,
-number of swarms), the learning interface (``interface`` and its parameters), the algorithm and
-its stable-baselines3 hyperparameters, the schedule (total steps, evaluation, checkpoints) and
-the seed. The CLI builds it from defaults, then a YAML file (``--config``), then flags, and
-stores the result in the run directory, so ``--config <run>/settings.yaml`` reruns it.
+A run is the task (preset, dynamics, config overrides, number of swarms), the learning
+interface (``interface`` and its parameters), the algorithm and its stable-baselines3
+hyperparameters, the schedule (total steps, evaluation, checkpoints) and the seed. Each setting
+is a :class:`~pairflock_env.config.fields.Field` declared below with the env config's field
+kinds and record machinery (:func:`~pairflock_env.config.schema.declare_record`), so a
+setting is checked, named in errors and documented (:func:`settings_help`, in ``python -m
+train --help``) from one declaration. The checks between settings - the task's configs build,
+the interface fits the task, every task of a mix gives the same spaces, the hyperparameters
+fit the algorithm - run with them, so an accepted ``RunSettings`` is a run that starts.
 
-YAML layout (every key optional; see ``train/configs/*.yaml``, which ship with the package:
-``--config pair_n20_a50`` names one, :func:`resolve_config`)::
+The CLI builds it from defaults, then a YAML file (``--config``), then flags
+(:func:`settings_from_sources`), and stores the result in the run directory, so ``--config
+<run>/settings.yaml`` reruns it. YAML layout (every key optional; see
+``train/configs/*.yaml``, which ship with the package: ``--config pair_n20_a50`` names one,
+:func:`resolve_config`)::
 
     algo: ppo                  # ppo | sac | td3
     preset: paper
@@ -15,10 +22,10 @@ YAML layout (every key optional; see ``train/configs/*.yaml``, which ship with t
       n_uavs: 20
       pair_accel_limit: 50.0
     eval_env: {horizon: 50.0}  # overrides applied on top of env for evaluation
-    interface: pair            # pair | world (the learning interface; old key: frame)
-    interface_params: {}       # PairInterfaceParams fields (old key: frame_params)
+    interface: pair            # pair | world (the learning interface)
+    interface_params: {}       # PairInterfaceParams fields
     num_swarms: 32
-    tasks:                     # optional: train on a mix (train/tasks.py, docs/learning.md)
+    tasks:                     # optional: train on a mix (train/mix/tasks.py, docs/learning.md)
       - {n_uavs: 20, init: corners, num_swarms: 8}
     eval_tasks: null           # optional: select on a mix (default: the training tasks)
     eval_aggregate: worst      # worst | sum of the per-task scores
@@ -31,38 +38,105 @@ YAML layout (every key optional; see ``train/configs/*.yaml``, which ship with t
       policy_kwargs: {net_arch: [128, 128], log_std_init: -1.0}
 
 Numbers are read as written, also in exponent form without a point (``3e-4``, ``5e1``),
-in files and in ``--set``/``--hp``/``--interface-param`` values alike.
+in files and in ``--set``/``--hp``/``--interface-param`` values alike. Model files store the
+settings (:meth:`RunSettings.from_dict` reads older ones through
+:func:`pairflock_env.compat.upgrade_stored`).
 """
 
 from __future__ import annotations
 
 import copy
-import dataclasses
 import difflib
-import inspect
-import warnings
-from collections.abc import Mapping
+import math
+import re
+import textwrap
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import yaml
+
 from baselines.controllers.zoo import find_packaged, packaged_names
-from baselines.evaluation.specs import parse_assignment
+from baselines.reporting.criteria import TARGETS
+from pairflock_env import make_config
+from pairflock_env.compat import upgrade_stored
+from pairflock_env.config.fields import Choice, Field, Flag, Int, OrNone, Real, fmt_num
+from pairflock_env.config.schema import Record, Schema, Section, declare_record
+from pairflock_env.interfaces import INTERFACES, make_interface
+from train.fields import ControllerNames, ModelFile, Overrides, SeedList, TaskList, Text
+from train.hyperparameters import ALGOS, algo_hyperparameters, check_hyperparameters
+from train.mix.tasks import AGGREGATES, TASK_KEYS, check_tasks
 
 __all__ = [
-    "ALGOS",
-    "DEFAULT_HYPERPARAMETERS",
-    "RENAMED_KEYS",
+    "RUN_SCHEMA",
     "RunSettings",
     "config_names",
     "env_interface_kwargs",
     "load_yaml",
-    "parse_assignment",
     "resolve_config",
     "settings_from_sources",
+    "settings_help",
 ]
 
-#: old settings keys -> new ones (the old ones still load, with a deprecation note)
-RENAMED_KEYS = {"frame": "interface", "frame_params": "interface_params"}
+_MANY = 10**12  # a count no run reaches (the upper end of the integer settings)
+
+SECTIONS = (
+    Section("task", "The task and the algorithm", "", (
+        Field("algo", Choice(ALGOS), "ppo", "", "algorithm (stable-baselines3)"),
+        Field("preset", Text("a preset's name"), "paper", "", "pairflock_env preset"),
+        Field("dynamics", OrNone(Text("a vehicle model's name"), "the preset's"), None, "",
+              "vehicle model, e.g. particle"),
+        Field("env", Overrides("PairFlockConfig fields"), {}, "",
+              "config overrides of the training task"),
+        Field("eval_env", Overrides("PairFlockConfig fields"), {}, "",
+              "overrides on top of env, for evaluation only"),
+    )),
+    Section("interface", "The learning interface", "", (
+        Field("interface", Choice(tuple(INTERFACES)), "pair", "",
+              "what the policy sees and outputs (pairflock_env.interfaces)"),
+        Field("interface_params", Overrides("the interface's parameters"), {}, "",
+              "parameters of the interface, e.g. {w_separation: 2}"),
+    )),
+    Section("training", "Training", "", (
+        Field("num_swarms", Int(1, _MANY), 32, "",
+              "swarms side by side; SB3 sees num_swarms x paired UAVs rows"),
+        Field("total_steps", Int(1, _MANY), 1_000_000, "decisions",
+              "environment steps (rows x vector steps) to train for"),
+        Field("seed", Int(0, 2**63 - 1), 0, "", "seed of the model, the swarms and SB3"),
+        Field("hyperparameters", Overrides("SB3 keyword arguments"), {}, "",
+              "on top of the algorithm's defaults (train.hyperparameters)"),
+    )),
+    Section("schedule", "Evaluation, checkpoints and output", "", (
+        Field("eval_every", Int(0, _MANY), 1_000_000, "decisions",
+              "between evaluations (0: none)"),
+        Field("eval_seeds", SeedList(), list(range(1000, 1010)), "",
+              "evaluation seeds (full episodes each)"),
+        Field("eval_baselines", ControllerNames(), ["smc", "proportional"], "",
+              "analytic controllers evaluated once for comparison"),
+        Field("checkpoint_every", Int(0, _MANY), 1_000_000, "decisions",
+              "between checkpoints (0: none)"),
+        Field("keep_checkpoints", Int(0, _MANY), 3, "", "newest checkpoints kept (0: all)"),
+        Field("tensorboard", Flag(), True, "", "a TensorBoard log next to the CSV one"),
+        Field("time_limit", OrNone(Real(0.0, math.inf, lo_open=True, hi_open=True), "none"),
+              None, "min", "stop cleanly (checkpoint, final model) after this long"),
+    )),
+    Section("mix", "Task mix, selection and warm start", "", (
+        Field("tasks", OrNone(TaskList(TASK_KEYS), "one task: env"), None, "",
+              "train on a mix of tasks (train/mix/tasks.py)"),
+        Field("eval_tasks", OrNone(TaskList(("name",)), "the training tasks"), None, "",
+              "select the best model on these tasks"),
+        Field("eval_aggregate", Choice(AGGREGATES), "worst", "",
+              "how the per-task scores become one"),
+        Field("eval_targets", Choice(tuple(TARGETS)), "learned", "",
+              "the targets the best model is kept by (baselines.reporting.criteria)"),
+        Field("init_model", OrNone(ModelFile(), "a fresh network"), None, "",
+              "start from this model's weights (fine-tuning)"),
+    )),
+)  # fmt: skip
+RUN_SCHEMA = Schema("run setting", SECTIONS)
+#: settings a run on one task stores only when they are set (it stores what it stored before
+#: they existed)
+_STORED_WHEN_SET = ("tasks", "eval_tasks", "eval_aggregate", "eval_targets", "init_model")
 
 
 def env_interface_kwargs(interface: str, params: Mapping[str, Any]) -> dict[str, Any]:
@@ -73,128 +147,54 @@ def env_interface_kwargs(interface: str, params: Mapping[str, Any]) -> dict[str,
     return {"interface": interface, "interface_params": dict(params)}
 
 
-def _renamed(data: Mapping[str, Any], where: str, category: type[Warning] | None) -> dict:
-    """``data`` with old keys (:data:`RENAMED_KEYS`) under their new names; warns with
-    ``category`` (None: silently, e.g. for stored model metadata)."""
-    out = dict(data)
-    for old, new in RENAMED_KEYS.items():
-        if old not in out:
-            continue
-        if new in out:
-            raise ValueError(
-                f"{where}: {old!r} and {new!r} are the same setting; give only {new!r}"
-            )
-        if category is not None:
-            warnings.warn(f"{where}: {old!r} is deprecated; write {new!r}", category, stacklevel=3)
-        out[new] = out.pop(old)
-    return out
+class _RunSettingsMethods(Record):
+    """What a run's settings derive, and the checks between them."""
 
+    stored_as = "settings"
 
-ALGOS = ("ppo", "sac", "td3")
+    def _fill(self, values: Mapping[str, Any], user_set: Sequence[str]) -> None:
+        # every way a record is made (constructor, from_dict, replace, unpickling) fills it
+        # here: the checks between settings follow the declared ones
+        super()._fill(values, user_set)
+        self._check_run()
 
-#: defaults per algorithm (SB3 keyword arguments); ``action_noise_std`` (TD3) is ours
-DEFAULT_HYPERPARAMETERS: dict[str, dict[str, Any]] = {
-    "ppo": {
-        "learning_rate": 3e-4,
-        "n_steps": 128,
-        "batch_size": 2048,
-        "n_epochs": 5,
-        "gamma": 0.98,
-        "gae_lambda": 0.95,
-        "clip_range": 0.2,
-        "ent_coef": 0.0,
-        "vf_coef": 0.5,
-        "max_grad_norm": 0.5,
-        "policy_kwargs": {"net_arch": [128, 128], "log_std_init": -1.0},
-    },
-    "sac": {
-        "learning_rate": 3e-4,
-        "buffer_size": 1_000_000,
-        "learning_starts": 10_000,
-        "batch_size": 256,
-        "tau": 0.005,
-        "gamma": 0.99,
-        "train_freq": 1,
-        "gradient_steps": 1,
-        "ent_coef": "auto",
-        "policy_kwargs": {"net_arch": [256, 256]},
-    },
-    "td3": {
-        "learning_rate": 1e-3,
-        "buffer_size": 1_000_000,
-        "learning_starts": 10_000,
-        "batch_size": 256,
-        "tau": 0.005,
-        "gamma": 0.99,
-        "train_freq": 1,
-        "gradient_steps": 1,
-        "action_noise_std": 0.1,
-        "policy_kwargs": {"net_arch": [256, 256]},
-    },
-}
-
-
-@dataclasses.dataclass
-class RunSettings:
-    """A complete, validated description of one training run (see the module docstring)."""
-
-    algo: str = "ppo"
-    preset: str = "paper"
-    dynamics: str | None = None
-    env: dict[str, Any] = dataclasses.field(default_factory=dict)
-    eval_env: dict[str, Any] = dataclasses.field(default_factory=dict)
-    interface: str = "pair"
-    interface_params: dict[str, Any] = dataclasses.field(default_factory=dict)
-    num_swarms: int = 32
-    total_steps: int = 1_000_000
-    seed: int = 0
-    hyperparameters: dict[str, Any] = dataclasses.field(default_factory=dict)
-    eval_every: int = 1_000_000
-    eval_seeds: list[int] = dataclasses.field(default_factory=lambda: list(range(1000, 1010)))
-    eval_baselines: list[str] = dataclasses.field(default_factory=lambda: ["smc", "proportional"])
-    checkpoint_every: int = 1_000_000
-    keep_checkpoints: int = 3
-    tensorboard: bool = True
-    time_limit: float | None = None
-    tasks: list[dict[str, Any]] | None = None
-    eval_tasks: list[dict[str, Any]] | None = None
-    eval_aggregate: str = "worst"
-    eval_targets: str = "learned"
-    init_model: str | None = None
+    def _check_run(self) -> None:
+        """The task's configs build, the interface fits them, every task of a mix gives the
+        same spaces, the hyperparameters fit the algorithm (each error names its setting)."""
+        cfg = make_config(self.preset, **self.config_overrides())
+        make_config(self.preset, **self.eval_overrides())
+        make_interface(self.interface, cfg, **self.interface_params)
+        check_tasks(self)
+        check_hyperparameters(self.algo, self.algo_hyperparameters())
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> RunSettings:
-        """Settings from a stored mapping (``settings.yaml``, model metadata), old keys too;
-        not validated."""
-        return cls(**_renamed(data, "settings", None))
+    def from_dict(cls, data: Mapping[str, Any]) -> Any:
+        """Settings as stored (``settings.yaml``, a model file's metadata), keys of older
+        releases included (:func:`pairflock_env.compat.upgrade_stored`)."""
+        if not isinstance(data, Mapping):
+            return super().from_dict(data)  # its error
+        data = upgrade_stored("settings", data)
+        nested = {"env": "config", "eval_env": "config", "interface_params": "interface"}
+        for key, kind in nested.items():
+            if isinstance(data.get(key), Mapping):
+                data[key] = upgrade_stored(kind, data[key])
+        for key in ("tasks", "eval_tasks"):
+            if isinstance(data.get(key), list):
+                data[key] = [
+                    upgrade_stored("config", t) if isinstance(t, Mapping) else t for t in data[key]
+                ]
+        return super().from_dict(data)
 
-    @property
-    def frame(self) -> str:
-        """Deprecated name of :attr:`interface`."""
-        warnings.warn("RunSettings.frame is deprecated; use .interface", DeprecationWarning, 2)
-        return self.interface
+    def to_dict(self) -> dict[str, Any]:
+        """A plain dict of the settings; the task-mix and warm-start settings only when they
+        are set."""
+        fields = self.schema.fields
+        return {
+            k: v
+            for k, v in super().to_dict().items()
+            if k not in _STORED_WHEN_SET or v != fields[k].default
+        }
 
-    @frame.setter
-    def frame(self, value: str) -> None:
-        warnings.warn("RunSettings.frame is deprecated; use .interface", DeprecationWarning, 2)
-        self.interface = value
-
-    @property
-    def frame_params(self) -> dict[str, Any]:
-        """Deprecated name of :attr:`interface_params`."""
-        warnings.warn(
-            "RunSettings.frame_params is deprecated; use .interface_params", DeprecationWarning, 2
-        )
-        return self.interface_params
-
-    @frame_params.setter
-    def frame_params(self, value: dict[str, Any]) -> None:
-        warnings.warn(
-            "RunSettings.frame_params is deprecated; use .interface_params", DeprecationWarning, 2
-        )
-        self.interface_params = value
-
-    # ------------------------------------------------------------------ derived
     def env_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of the training env's interface (:func:`env_interface_kwargs`)."""
         return env_interface_kwargs(self.interface, self.interface_params)
@@ -216,138 +216,39 @@ class RunSettings:
         return out
 
     def algo_hyperparameters(self) -> dict[str, Any]:
-        hp = copy.deepcopy(DEFAULT_HYPERPARAMETERS[self.algo])
-        for k, v in self.hyperparameters.items():
-            if k == "policy_kwargs" and isinstance(v, Mapping):
-                hp.setdefault("policy_kwargs", {}).update(v)
-            else:
-                hp[k] = v
-        return hp
+        """The algorithm's defaults with the run's ``hyperparameters`` on top."""
+        return algo_hyperparameters(self.algo, self.hyperparameters)
 
-    def to_dict(self) -> dict[str, Any]:
-        """A plain dict of the settings; the task-mix fields only when they are set, so that
-        a run on one task stores exactly what it stored before they existed."""
-        out = dataclasses.asdict(self)
-        for name, default in _MIX_DEFAULTS.items():
-            if out[name] == default:
-                del out[name]
-        return out
 
-    # ------------------------------------------------------------------ validation
-    def validate(self) -> RunSettings:
-        from pairflock_env import make_config
-        from pairflock_env.interfaces import make_interface
+RunSettings = declare_record(
+    "RunSettings",
+    RUN_SCHEMA,
+    _RunSettingsMethods,
+    __name__,
+    "A complete, validated description of one training run (see the module docstring).",
+)
 
-        if self.algo not in ALGOS:
-            raise ValueError(f"algo={self.algo!r} is invalid: must be one of {', '.join(ALGOS)}")
-        for name in (
-            "num_swarms",
-            "total_steps",
-            "eval_every",
-            "checkpoint_every",
-            "seed",
-            "keep_checkpoints",
-        ):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int):
-                raise TypeError(f"{name}={v!r} is invalid: must be an integer")
-            lo = 0 if name in ("seed", "eval_every", "checkpoint_every", "keep_checkpoints") else 1
-            if v < lo:
-                raise ValueError(f"{name}={v!r} is invalid: must be >= {lo}")
-        if self.time_limit is not None and not (
-            isinstance(self.time_limit, (int, float)) and self.time_limit > 0
-        ):
-            raise ValueError(
-                f"time_limit={self.time_limit!r} is invalid: must be > 0 minutes or None"
+
+def settings_help(width: int = 92) -> str:
+    """The settings, section by section: name, default, meaning and what is valid (the keys
+    of ``--config`` files and of ``<run>/settings.yaml``)."""
+    lines = []
+    for sec in RUN_SCHEMA.sections:
+        lines.append(f"  {sec.title.lower()}:")
+        for f in sec.fields:
+            default = f.default if isinstance(f.default, (dict, list)) else fmt_num(f.default)
+            unit = f" {f.unit}" if f.unit and f.default is not None else ""
+            text = f"{f.doc}; default {default}{unit}; {f.kind.valid()}"
+            lines += textwrap.wrap(
+                text, width, initial_indent=f"    {f.name:<17} ", subsequent_indent=" " * 22
             )
-        if self.init_model is not None:
-            from train.model import init_model_path
-
-            init_model_path(self.init_model)
-        for name in ("env", "eval_env", "interface_params", "hyperparameters"):
-            if not isinstance(getattr(self, name), Mapping):
-                raise TypeError(f"{name}={getattr(self, name)!r} is invalid: must be a mapping")
-        if not isinstance(self.eval_seeds, list) or not all(
-            isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in self.eval_seeds
-        ):
-            raise ValueError(f"eval_seeds={self.eval_seeds!r} is invalid: a list of ints >= 0")
-        cfg = make_config(self.preset, **self.config_overrides())
-        make_config(self.preset, **self.eval_overrides())
-        make_interface(self.interface, cfg, **self.interface_params)
-        from baselines import POLICIES
-
-        for b in self.eval_baselines:
-            if b not in POLICIES or b.endswith(":"):
-                raise ValueError(
-                    f"eval_baselines entry {b!r} is invalid: analytic controllers are "
-                    f"{', '.join(k for k in POLICIES if not k.endswith(':'))}"
-                )
-        from train.tasks import check_tasks
-
-        check_tasks(self)
-        _check_hyperparameters(self.algo, self.algo_hyperparameters())
-        from train.model import resolve_schedules
-
-        resolve_schedules(self.algo_hyperparameters())
-        return self
-
-
-#: fields of a task mix and their defaults (left out of :meth:`RunSettings.to_dict` when unset)
-_MIX_DEFAULTS = {
-    "tasks": None,
-    "eval_tasks": None,
-    "eval_aggregate": "worst",
-    "eval_targets": "learned",
-    "init_model": None,
-}
-
-
-def _check_hyperparameters(algo: str, hp: Mapping[str, Any]) -> None:
-    import stable_baselines3 as sb3
-
-    cls = getattr(sb3, algo.upper())
-    valid = set(inspect.signature(cls.__init__).parameters) - {"self", "policy", "env"}
-    if algo == "td3":
-        valid.add("action_noise_std")
-    for k in hp:
-        if k not in valid:
-            hint = difflib.get_close_matches(k, sorted(valid), n=3)
-            extra = f" Did you mean {', '.join(map(repr, hint))}?" if hint else ""
-            raise ValueError(
-                f"hyperparameter {k!r} is invalid for {algo.upper()}.{extra} "
-                f"Valid: {', '.join(sorted(valid))}"
-            )
-    for k in ("seed", "device", "tensorboard_log", "verbose"):
-        if k in hp:
-            raise ValueError(
-                f"hyperparameter {k!r} is set by the CLI (use --seed / --out / --quiet), not in "
-                "hyperparameters"
-            )
-
-
-def _wrap_init(cls):
-    """Let ``RunSettings(frame=...)`` (the old keyword names) keep working, with a warning."""
-    init = cls.__init__
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        init(self, *args, **_renamed(kwargs, "RunSettings", DeprecationWarning))
-
-    __init__.__doc__ = init.__doc__
-    __init__.__signature__ = inspect.signature(init)  # type: ignore[attr-defined]
-    cls.__init__ = __init__
-    return cls
-
-
-_wrap_init(RunSettings)
+    return "\n".join(lines)
 
 
 def _yaml_loader():
     """PyYAML's safe loader reading numbers as a user writes them: YAML 1.1 takes ``1e-3``
     and ``5e1`` (an exponent without a decimal point) for text, YAML 1.2 and Python for
     numbers."""
-    import re
-
-    import yaml
 
     class Loader(yaml.SafeLoader):
         pass
@@ -373,10 +274,7 @@ def resolve_config(value: str | Path) -> Path:
 
 def load_yaml(path: str | Path) -> dict[str, Any]:
     """A settings mapping from a YAML file or a packaged config's name
-    (:func:`resolve_config`); unknown top-level keys raise with suggestions, the old keys
-    ``frame``/``frame_params`` load with a deprecation note."""
-    import yaml
-
+    (:func:`resolve_config`); unknown top-level keys raise with suggestions."""
     path = resolve_config(path)
     with open(path, encoding="utf-8") as f:
         try:
@@ -385,16 +283,15 @@ def load_yaml(path: str | Path) -> dict[str, Any]:
             raise ValueError(f"--config {str(path)!r} is not valid YAML: {e}") from None
     if not isinstance(data, Mapping):
         raise ValueError(f"--config {str(path)!r} must hold a mapping, got {type(data).__name__}")
-    where = f"--config {path}"
-    _check_keys(data, where)
-    return _renamed(data, where, FutureWarning)
+    _check_keys(data, f"--config {path}")
+    return dict(data)
 
 
 def _check_keys(data: Mapping[str, Any], where: str) -> None:
-    names = [f.name for f in dataclasses.fields(RunSettings)]
+    names = list(RUN_SCHEMA.fields)
     for k in data:
-        if k not in names and k not in RENAMED_KEYS:
-            hint = difflib.get_close_matches(k, names, n=3)
+        if k not in names:
+            hint = difflib.get_close_matches(str(k), names, n=3)
             extra = f" Did you mean {', '.join(map(repr, hint))}?" if hint else ""
             raise ValueError(f"{where}: unknown key {k!r}.{extra} Valid keys: {', '.join(names)}")
 
@@ -412,35 +309,23 @@ def _set_nested(d: dict[str, Any], key: str, value: Any) -> None:
 def settings_from_sources(
     yaml_data: Mapping[str, Any] | None = None,
     flags: Mapping[str, Any] | None = None,
-    env_sets: list[tuple[str, Any]] = (),
-    hp_sets: list[tuple[str, Any]] = (),
-    interface_sets: list[tuple[str, Any]] = (),
-    *,
-    frame_sets: list[tuple[str, Any]] = (),
-) -> RunSettings:
-    """Defaults < YAML < flags (< ``--set`` / ``--hp`` / ``--interface-param`` assignments).
-
-    ``frame_sets`` is the old name of ``interface_sets`` (both are applied); old keys in
-    ``yaml_data`` and ``flags`` are accepted too (:data:`RENAMED_KEYS`).
-    """
+    env_sets: Sequence[tuple[str, Any]] = (),
+    hp_sets: Sequence[tuple[str, Any]] = (),
+    interface_sets: Sequence[tuple[str, Any]] = (),
+) -> Any:
+    """Defaults < YAML < flags (< ``--set`` / ``--hp`` / ``--interface-param`` assignments):
+    the validated :class:`RunSettings`."""
     data: dict[str, Any] = {}
     if yaml_data:
         _check_keys(yaml_data, "settings")
-        data.update(copy.deepcopy(_renamed(yaml_data, "settings", DeprecationWarning)))
-    given = {k: v for k, v in (flags or {}).items() if v is not None}
-    data.update(_renamed(given, "flags", DeprecationWarning))
-    if frame_sets:
-        warnings.warn("frame_sets is deprecated; use interface_sets", DeprecationWarning, 2)
-    s = RunSettings(**data)
-    s.env = dict(s.env)
-    s.hyperparameters = copy.deepcopy(dict(s.hyperparameters))
-    s.interface_params = dict(s.interface_params)
-    for k, v in env_sets:
-        s.env[k] = v
-    for k, v in hp_sets:
-        _set_nested(s.hyperparameters, k, v)
-    for k, v in [*interface_sets, *frame_sets]:
-        s.interface_params[k] = v
-    if isinstance(s.eval_seeds, tuple):
-        s.eval_seeds = list(s.eval_seeds)
-    return s.validate()
+        data.update(copy.deepcopy(dict(yaml_data)))
+    data.update({k: v for k, v in (flags or {}).items() if v is not None})
+    for key, sets in (("env", env_sets), ("interface_params", interface_sets)):
+        if sets and isinstance(data.get(key, {}), Mapping):
+            data[key] = {**data.get(key, {}), **dict(sets)}
+    if hp_sets and isinstance(data.get("hyperparameters", {}), Mapping):
+        hp = copy.deepcopy(dict(data.get("hyperparameters", {})))
+        for k, v in hp_sets:
+            _set_nested(hp, k, v)
+        data["hyperparameters"] = hp
+    return RunSettings(**data)

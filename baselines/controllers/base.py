@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import difflib
 import numbers
 from typing import Any
 
@@ -74,8 +75,6 @@ class PairPolicy:
         self.config, self.layout = resolve_env(env)
         unknown = sorted(set(gains) - set(self.GAINS))
         if unknown:
-            import difflib
-
             valid = ", ".join(self.GAINS) or "none"
             hints = [h for u in unknown for h in difflib.get_close_matches(u, self.GAINS, n=1)]
             extra = f" (did you mean {', '.join(map(repr, hints))}?)" if hints else ""

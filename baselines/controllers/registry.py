@@ -3,23 +3,17 @@
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Callable
 from typing import Any
 
 from baselines.controllers.base import ZeroPolicy
 from baselines.controllers.braking import BrakingCurveController
 from baselines.controllers.proportional import ProportionalController
+from baselines.controllers.sb3 import load_sb3_policy
 from baselines.controllers.sliding_mode import SlidingModeController
 
 __all__ = ["POLICIES", "make_pair_policy"]
-
-
-def _sb3_policy(path: str, env: Any, **gains: Any) -> Any:
-    """``"sb3:<path>"``: a model saved by ``python -m train``, or ``"sb3:<name>"``: a packaged
-    policy (:mod:`baselines.controllers.zoo`); imports SB3/torch lazily."""
-    from baselines.controllers.sb3 import load_sb3_policy
-
-    return load_sb3_policy(path, env, **gains)
 
 
 #: name -> factory(env, **gains); a prefix entry "name:" takes the text after the colon
@@ -28,7 +22,7 @@ POLICIES: dict[str, Callable[..., Any]] = {
     "proportional": ProportionalController,
     "braking": BrakingCurveController,
     "zero": ZeroPolicy,
-    "sb3:": _sb3_policy,
+    "sb3:": load_sb3_policy,  # a model saved by python -m train, or a packaged one
 }
 
 
@@ -51,8 +45,6 @@ def make_pair_policy(name: str, env: Any, **gains: Any) -> Any:
             )
         return factory(arg, env, **gains)
     if name not in POLICIES:
-        import difflib
-
         hint = difflib.get_close_matches(name, list(POLICIES), n=1)
         extra = f" (did you mean {hint[0]!r}?)" if hint else ""
         raise ValueError(

@@ -11,7 +11,8 @@ observation and returns the env's standard action, like the analytic controllers
     policy = make_pair_policy("sb3:runs/ppo/final_model.zip", env)
     action, _ = policy.predict(obs["uav_0"])
 
-Imports stable-baselines3 and torch; only loaded when an ``sb3:`` policy is requested.
+Imports stable-baselines3 and torch when an ``sb3:`` policy is loaded (through
+:mod:`baselines.runtime.optional`: they come with ``pairflock-env[train]``).
 """
 
 from __future__ import annotations
@@ -23,6 +24,8 @@ import numpy as np
 
 from baselines.controllers.base import check_observation, resolve_env
 from baselines.controllers.zoo import resolve_model
+from baselines.runtime import optional
+from pairflock_env.interfaces import interface_from_dict
 from pairflock_env.interfaces.hold import DecisionHold
 
 __all__ = ["ALGORITHMS", "METADATA_KEY", "SB3PairPolicy", "load_sb3_policy", "read_metadata"]
@@ -33,20 +36,17 @@ ALGORITHMS = ("PPO", "SAC", "TD3")
 
 
 def _algo_class(name: str):
-    import stable_baselines3 as sb3
-
     if name not in ALGORITHMS:
         raise ValueError(f"algorithm {name!r} is invalid: must be one of {', '.join(ALGORITHMS)}")
-    return getattr(sb3, name)
+    return getattr(optional.load("stable_baselines3", "an sb3: policy"), name)
 
 
 def read_metadata(path: str | Path) -> dict[str, Any]:
     """The pairflock metadata stored in a model zip (without building the model); ``path``
     may name a packaged policy (:func:`~baselines.controllers.zoo.resolve_model`)."""
-    from stable_baselines3.common.save_util import load_from_zip_file
-
+    save_util = optional.load("stable_baselines3.common.save_util", "an sb3: policy")
     path = resolve_model(path)
-    data, _, _ = load_from_zip_file(path, device="cpu", load_data=True)
+    data, _, _ = save_util.load_from_zip_file(path, device="cpu", load_data=True)
     meta = (data or {}).get(METADATA_KEY)
     if not isinstance(meta, dict) or "algo" not in meta or "interface" not in meta:
         raise ValueError(
@@ -72,8 +72,6 @@ class SB3PairPolicy:
     """
 
     def __init__(self, model: Any, env: Any, interface: dict[str, Any]) -> None:
-        from pairflock_env.interfaces import interface_from_dict
-
         self.config, self.layout = resolve_env(env)
         self.model = model
         self.interface = interface_from_dict(interface, self.config)

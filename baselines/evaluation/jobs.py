@@ -10,13 +10,17 @@ return identical numbers, and ``tests/test_benchmark.py`` checks both properties
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import numpy as np
 
-from baselines.evaluation.parallel import imap_unordered, pin_threads
+from baselines.evaluation.rollout import rollout, trace_metrics
 from baselines.evaluation.specs import PolicySpec
+from baselines.runtime import optional
+from baselines.runtime.pool import imap_unordered
+from baselines.runtime.threads import pin_threads
 from pairflock_env import PairFlockConfig
 
 __all__ = ["BACKENDS", "Job", "make_jobs", "run_job", "run_jobs"]
@@ -78,10 +82,6 @@ def run_job(job: Job) -> dict[str, Any]:
     Top-level and free of closures so that process pools and Ray can ship it.
     """
     pin_threads()
-    import time
-
-    from baselines.evaluation.rollout import rollout, trace_metrics
-
     cpu0, wall0 = time.process_time(), time.perf_counter()
     policy = job.spec.build(job.config)
     rec_rows = () if job.record_seed is None else (job.seeds.index(job.record_seed),)
@@ -120,10 +120,7 @@ def _local(jobs: Sequence[Job], workers: int) -> Iterator[tuple[Job, dict[str, A
 def _ray(
     jobs: Sequence[Job], workers: int, address: str | None
 ) -> Iterator[tuple[Job, dict[str, Any]]]:
-    try:
-        import ray
-    except ImportError:
-        raise ImportError("--backend ray needs Ray: pip install 'pairflock-env[ray]'") from None
+    ray = optional.load("ray", "--backend ray")
     started = False
     if not ray.is_initialized():
         kwargs: dict[str, Any] = dict(include_dashboard=False, log_to_driver=False)

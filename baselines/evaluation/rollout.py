@@ -15,7 +15,14 @@ from typing import Any
 import numpy as np
 
 from pairflock_env import PairFlockConfig, PairFlockCore
-from pairflock_env.task.metrics import pair_episode_metrics, pair_safety_metrics
+from pairflock_env.task.metrics import (
+    FLOCK_STATE_NAMES,
+    flock_quality_metrics,
+    flock_state,
+    pair_episode_metrics,
+    pair_safety_metrics,
+    swarm_safety_metrics,
+)
 
 __all__ = ["Trace", "rollout", "trace_metrics"]
 
@@ -41,6 +48,11 @@ class Trace:
     safety_infeasible_steps: np.ndarray  # (B, M)
     peak_correction: np.ndarray  # (B, M) largest ||u - u_nom||, m/s^2
     ended: np.ndarray  # (B,) control steps actually run (early termination < T)
+    swarm_separation: np.ndarray  # (B, T+1) the closest two UAVs (swarm_min_separation)
+    swarm_active: np.ndarray  # (B, T) UAVs whose command the safety stage changed
+    swarm_infeasible: np.ndarray  # (B, T) UAVs with no command meeting every constraint
+    flock_t: np.ndarray  # (S,) times of the flock samples (every FLOCK_EVERY s)
+    flock: np.ndarray  # (B, S, 3) flock_state (FLOCK_STATE_NAMES) at those times
     positions: dict[int, np.ndarray]  # row -> (T+1, N, dim), only for recorded rows
     velocities: dict[int, np.ndarray]
     leader_positions: dict[int, np.ndarray]  # row -> (T+1, dim)
@@ -50,8 +62,17 @@ class Trace:
         return self.pair_error.shape[0]
 
 
+#: the flock's state (radius of gyration, tracking, lattice deviation) is sampled this often (s)
+FLOCK_EVERY = 1.0
+
+
+def _flock_stride(config: PairFlockConfig) -> int:
+    return max(1, round(FLOCK_EVERY / config.dt))
+
+
 def _empty_trace(config: PairFlockConfig, seeds: list[int], M: int, T: int, record_rows) -> Trace:
     B, P, D = len(seeds), M // 2, config.dim
+    S = T // _flock_stride(config) + 1
     return Trace(
         config=config,
         seeds=seeds,
@@ -70,6 +91,11 @@ def _empty_trace(config: PairFlockConfig, seeds: list[int], M: int, T: int, reco
         safety_infeasible_steps=np.zeros((B, M), np.int64),
         peak_correction=np.zeros((B, M)),
         ended=np.full(B, T, np.int64),
+        swarm_separation=np.empty((B, T + 1)),
+        swarm_active=np.zeros((B, T), np.int64),
+        swarm_infeasible=np.zeros((B, T), np.int64),
+        flock_t=np.arange(S) * _flock_stride(config) * config.dt,
+        flock=np.empty((B, S, len(FLOCK_STATE_NAMES))),
         positions={int(r): np.empty((T + 1, config.n_uavs, D)) for r in record_rows},
         velocities={int(r): np.empty((T + 1, config.n_uavs, D)) for r in record_rows},
         leader_positions={int(r): np.empty((T + 1, D)) for r in record_rows},
@@ -91,6 +117,10 @@ def _record(tr: Trace, core: PairFlockCore, k: int, res, live: np.ndarray) -> No
     tr.largest_component[live, k] = info["largest_component"][live]
     tr.velocity_mismatch[live, k] = info["velocity_mismatch"][live]
     tr.collisions[live, k] = info["collisions"][live]
+    tr.swarm_separation[live, k] = info["swarm_min_separation"][live]
+    stride = _flock_stride(tr.config)
+    if k % stride == 0:
+        _record_flock(tr, core, k // stride, live)
     if tr.positions:
         lq, _ = core.leader_state()
         for r in tr.positions:
@@ -98,6 +128,20 @@ def _record(tr: Trace, core: PairFlockCore, k: int, res, live: np.ndarray) -> No
                 tr.positions[r][k] = core.q[r]
                 tr.velocities[r][k] = core.p[r]
                 tr.leader_positions[r][k] = lq[r]
+
+
+def _record_flock(tr: Trace, core: PairFlockCore, s: int, live: np.ndarray) -> None:
+    """Flock sample ``s`` of the live swarms (the others hold their last one)."""
+    cfg = tr.config
+    unpaired = np.ones(cfg.n_uavs, bool)
+    unpaired[core.agent_uavs] = False
+    lq, _ = core.leader_state()
+    grid = core.neighbor_grid
+    for b in range(tr.num_swarms):
+        if live[b]:
+            tr.flock[b, s] = flock_state(core.q, b, lq[b], unpaired, cfg.radius, cfg.spacing, grid)
+        else:
+            tr.flock[b, s] = tr.flock[b, s - 1]
 
 
 def _record_safety(tr: Trace, info, live: np.ndarray) -> None:
@@ -110,6 +154,17 @@ def _record_safety(tr: Trace, info, live: np.ndarray) -> None:
     )
 
 
+def _record_step(tr: Trace, core: PairFlockCore, k: int, res, live, filtered: bool) -> None:
+    """What step ``k`` adds to the trace of the swarms still running (``live``)."""
+    tr.u[live, :, k - 1] = core.pair_command[live]  # the applied (filtered) command
+    if filtered:
+        _record_safety(tr, res.info, live)
+    tr.clipped_steps[live] += res.info["action_clipped"][live]
+    tr.swarm_active[live, k - 1] = res.info["swarm_filter_active"][live]
+    tr.swarm_infeasible[live, k - 1] = res.info["swarm_filter_infeasible"][live]
+    _record(tr, core, k, res, live)
+
+
 def _freeze_finished(tr: Trace, T: int) -> None:
     """Hold the series of swarms that ended early at their last value."""
     for b in np.flatnonzero(tr.ended < T):
@@ -118,6 +173,7 @@ def _freeze_finished(tr: Trace, T: int) -> None:
             arr[b, ..., e + 1 :] = arr[b, ..., e : e + 1]
         for arr in (tr.largest_component, tr.velocity_mismatch, tr.collisions):
             arr[b, e + 1 :] = arr[b, e]
+        tr.swarm_separation[b, e + 1 :] = tr.swarm_separation[b, e]
 
 
 class _Progress:
@@ -183,11 +239,7 @@ def rollout(
         actions = np.asarray(actions, dtype=np.float64).reshape(B, M, D)
         res = core.step(actions)
         live = ~done
-        tr.u[live, :, k - 1] = core.pair_command[live]  # the applied (filtered) command
-        if filtered:
-            _record_safety(tr, res.info, live)
-        tr.clipped_steps[live] += res.info["action_clipped"][live]
-        _record(tr, core, k, res, live)
+        _record_step(tr, core, k, res, live, filtered)
         if on_step is not None:
             on_step(k, core, res, live)
         ended_now = live & (res.terminated | res.truncated)
@@ -202,18 +254,52 @@ def rollout(
     return tr
 
 
-def trace_metrics(tr: Trace, *, safety_metrics: bool | None = None, **kwargs: Any):
+def _swarm_metrics(tr: Trace, b: int, steady_window: float) -> dict[str, Any]:
+    """Swarm b's separation and flock quality (the same on each of its pairs' rows)."""
+    e = tr.ended[b]
+    m = swarm_safety_metrics(
+        tr.swarm_separation[b],
+        tr.swarm_active[b, :e],
+        tr.swarm_infeasible[b, :e],
+        tr.config.safety_distance,
+    )
+    m.update(
+        flock_quality_metrics(
+            tr.flock_t,
+            tr.flock[b],
+            tr.t,
+            tr.velocity_mismatch[b],
+            tr.largest_component[b],
+            steady_window=steady_window,
+        )
+    )
+    return m
+
+
+def trace_metrics(
+    tr: Trace,
+    *,
+    safety_metrics: bool | None = None,
+    swarm_metrics: bool | None = None,
+    **kwargs: Any,
+):
     """Metrics of every (swarm, pair) of a trace, one dict each (with ``seed`` and ``pair``).
 
     ``safety_metrics`` adds the columns of :data:`~pairflock_env.task.metrics.SAFETY_METRIC_DOCS`
     (default: when the trace's config has ``safety_filter`` on; pass True for the same columns
-    in every run of a comparison with the filter off and on). ``kwargs`` go to
+    in every run of a comparison with the filter off and on). ``swarm_metrics`` adds the
+    whole swarm's separation and the flock's quality (:data:`~pairflock_env.task.metrics.
+    SWARM_SAFETY_METRIC_DOCS`, :data:`~pairflock_env.task.metrics.FLOCK_METRIC_DOCS`;
+    default: with ``safety_scope="swarm"``). ``kwargs`` go to
     :func:`~pairflock_env.task.metrics.pair_episode_metrics`."""
     cfg = tr.config
     if safety_metrics is None:
         safety_metrics = cfg.safety_filter != "none"
+    if swarm_metrics is None:
+        swarm_metrics = cfg.safety_scope == "swarm"
     out = []
     for b in range(tr.num_swarms):
+        swarm = _swarm_metrics(tr, b, kwargs.get("steady_window", 10.0)) if swarm_metrics else {}
         for k in range(tr.pair_error.shape[1]):
             ms = slice(2 * k, 2 * k + 2)
             m = pair_episode_metrics(
@@ -245,6 +331,7 @@ def trace_metrics(tr: Trace, *, safety_metrics: bool | None = None, **kwargs: An
                 "seed": tr.seeds[b],
                 "pair": k,
                 **m,
+                **swarm,
                 "clipped_steps": int(tr.clipped_steps[b, ms].sum()),
                 "steps_run": int(tr.ended[b]),
             }

@@ -19,6 +19,7 @@ else plain text (``dynamics=particle``).
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import itertools
 import json
@@ -26,6 +27,9 @@ import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
+
+from baselines.controllers import POLICIES, make_pair_policy
+from baselines.runtime import optional
 
 __all__ = [
     "SHORT_NAMES",
@@ -68,8 +72,6 @@ class PolicySpec:
         return self.name.split(":", 1)[0]
 
     def build(self, env: Any) -> Any:
-        from baselines.controllers import make_pair_policy
-
         return make_pair_policy(self.name, env, **dict(self.gains))
 
 
@@ -113,8 +115,8 @@ def _numbers_inside(value: Any) -> Any:
 
 def _yaml_flow(text: str) -> Any:
     try:
-        import yaml
-    except ImportError:  # the base install has no YAML: JSON and Python literals only
+        yaml = optional.load("yaml")
+    except ModuleNotFoundError:  # the base install has no YAML: JSON and Python literals only
         raise ValueError(text) from None
     try:
         return _numbers_inside(yaml.safe_load(text))
@@ -139,8 +141,6 @@ def parse_value(text: str) -> Any:
     if number is not None:
         return number
     if t[:1] in "[{(":
-        import ast
-
         for parse in (json.loads, ast.literal_eval, _yaml_flow):
             try:
                 return parse(t)
@@ -197,8 +197,6 @@ def parse_policy(spec: str) -> PolicySpec:
     """Parse one policy spec (module docstring); unknown names raise ``ValueError`` listing
     the registered ones. Prefix arguments that name an existing local file are made absolute
     so that worker processes started elsewhere find it."""
-    from baselines.controllers import POLICIES
-
     if not isinstance(spec, str) or not spec.strip():
         raise ValueError(f"policy spec {spec!r} is invalid: expected e.g. 'smc' or 'smc:k=200'")
     spec = spec.strip()

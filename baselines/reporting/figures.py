@@ -19,8 +19,9 @@ from typing import Any
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
-from baselines.evaluation.io import atomic_write_bytes
+from baselines.runtime.files import atomic_write_bytes
 from pairflock_env.render import PAIR_COLORS, UNPAIRED_COLOR, draw_swarm
 
 __all__ = [
@@ -276,8 +277,6 @@ def steady_error_figure(
     )
     ax.set_xlim(-0.6, len(scenarios) - 0.4)
     if log:
-        from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
-
         ax.set_yscale("log")
         # plain numbers at 1-2-5 steps: decades alone are too sparse to read 0.2 m off
         ax.yaxis.set_major_locator(LogLocator(base=10.0, subs=(1.0, 2.0, 5.0)))

@@ -2,7 +2,10 @@
 
 Every summary of the project (benchmark, reproduction, quadrotor experiment, training
 evaluation) is :func:`summary_table`: one line per group of rows, leading cells that name the
-group, then ``median [min-max]`` over the group's runs per metric.
+group, then ``median [min-max]`` over the group's runs per metric. :func:`safety_table` is the
+safety filter's table of a benchmark whose runs carry the safety columns
+(:data:`pairflock_env.task.metrics.SAFETY_METRIC_DOCS`): per (policy, scenario), what the
+filter buys and what it costs.
 """
 
 from __future__ import annotations
@@ -18,12 +21,17 @@ __all__ = [
     "ACCURACY_METRICS",
     "COST_METRICS",
     "PIVOT_METRICS",
+    "SAFETY_METRICS",
     "SCENARIO_KEYS",
+    "has_safety_columns",
+    "has_swarm_columns",
     "md_escape",
     "pivot_table",
+    "safety_table",
     "stat_cell",
     "summarize",
     "summary_table",
+    "swarm_table",
 ]
 
 Row = Mapping[str, Any]
@@ -161,3 +169,115 @@ def pivot_table(rows: Sequence[Row], metric: str, fmt: str, keys: Keys = SCENARI
             cells.append(stat_cell(vals, fmt) if vals else "-")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------- safety
+def _finite(values: Sequence[Any]) -> tuple[np.ndarray, int]:
+    v = np.asarray(values, dtype=float)
+    return v[np.isfinite(v)], int(v.size)
+
+
+def _median_worst(fmt: str):
+    """``median / worst`` (largest); runs that never got there are counted."""
+
+    def cell(values: list[Any], rows: list[Row]) -> str:
+        f, n = _finite(values)
+        if f.size == 0:
+            return "never"
+        text = f"{fmt.format(np.median(f))} / {fmt.format(f.max())}"
+        return text if f.size == n else f"{text} (never in {n - f.size}/{n})"
+
+    return cell
+
+
+def _smallest(values: list[Any], rows: list[Row]) -> str:
+    f, _ = _finite(values)
+    return f"{f.min():.2f}" if f.size else "-"
+
+
+def _count_ok(values: list[Any], rows: list[Row]) -> str:
+    return f"{int(np.sum(values))}/{len(values)}"
+
+
+def _total_and_runs(values: list[Any], rows: list[Row]) -> str:
+    v = np.asarray(values, dtype=np.int64)
+    return f"{int(v.sum())} ({int(np.count_nonzero(v))} runs)" if v.any() else "0"
+
+
+def _median(fmt: str):
+    def cell(values: list[Any], rows: list[Row]) -> str:
+        f, _ = _finite(values)
+        return fmt.format(np.median(f)) if f.size else "-"
+
+    return cell
+
+
+#: (metric, header, cell) of the safety table
+SAFETY_METRICS = (
+    ("ss_mean_error", "steady err median / worst (m)", _median_worst("{:.3f}")),
+    ("band_time", "band time median / max (s)", _median_worst("{:.2f}")),
+    ("closest_pass", "closest pass min (m)", _smallest),
+    ("closest_pass_ok", "runs >= safety_distance", _count_ok),
+    ("peak_accel", "peak accel median / max (m/s^2)", _median_worst("{:.0f}")),
+    ("effort", "effort median (m^2/s^3)", _median("{:.3g}")),
+    ("safety_infeasible_steps", "infeasible agent-steps", _total_and_runs),
+    ("safety_active_steps", "active agent-steps median", _median("{:.0f}")),
+)
+
+
+def has_safety_columns(rows: Sequence[Row]) -> bool:
+    """Whether the runs carry the safety filter's metrics."""
+    return bool(rows) and all("closest_pass" in r for r in rows)
+
+
+def safety_table(rows: Sequence[Row], keys: Keys, metrics: Sequence[Metric] | None = None) -> str:
+    """Markdown: one line per (policy, scenario), policies in order of appearance and their
+    scenarios in order; leading columns the policy and ``keys`` (header, row key); columns
+    ``metrics`` (default :data:`SAFETY_METRICS`)."""
+    pols: dict[str, int] = {}
+    scen: dict[str, int] = {}
+    for r in rows:
+        pols.setdefault(r["policy"], len(pols))
+        scen.setdefault(r["scenario"], len(scen))
+    lead = [("policy", "policy"), *((h, lambda r, k=k: r.get(k, r["scenario"])) for h, k in keys)]
+    return summary_table(
+        rows,
+        SAFETY_METRICS if metrics is None else metrics,
+        lead=lead,
+        group=lambda r: (r["policy"], r["scenario"]),
+        sort=lambda g: (pols[g[0]], scen[g[1]]),
+    )
+
+
+# --------------------------------------------------------------------------- every UAV
+def _none_below(values: list[Any], rows: list[Row]) -> str:
+    return f"{int(np.sum(np.asarray(values) == 0))}/{len(values)}"
+
+
+def _smallest_int(values: list[Any], rows: list[Row]) -> str:
+    return f"{int(np.min(values))}" if values else "-"
+
+
+#: (metric, header, cell) of the whole swarm's table (one row per run: swarm metrics)
+SWARM_METRICS = (
+    ("swarm_closest", "closest two UAVs min (m)", lambda v, r: f"{np.min(v):.3f}"),
+    ("swarm_steps_below", "runs never below D_s", _none_below),
+    ("swarm_infeasible_uav_steps", "infeasible UAV-steps", _total_and_runs),
+    ("swarm_active_uav_steps", "active UAV-steps median", _median("{:.0f}")),
+    ("flock_gyration", "Rg median (m)", _median("{:.2f}")),
+    ("flock_velocity_mismatch", "vel. mismatch median (m/s)", _median("{:.4f}")),
+    ("flock_tracking", "tracking median (m)", _median("{:.3f}")),
+    ("flock_lattice_deviation", "lattice dev. median (m^2)", _median("{:.3g}")),
+    ("flock_min_component", "largest component min", _smallest_int),
+)
+
+
+def has_swarm_columns(rows: Sequence[Row]) -> bool:
+    """Whether the runs carry the whole swarm's separation and flock metrics."""
+    return bool(rows) and all("swarm_closest" in r for r in rows)
+
+
+def swarm_table(rows: Sequence[Row], keys: Keys) -> str:
+    """Markdown: :data:`SWARM_METRICS` per (policy, scenario), over runs (one row per swarm:
+    the pair-0 rows, since a swarm's metrics repeat on each of its pairs' rows)."""
+    return safety_table([r for r in rows if r["pair"] == 0], keys, SWARM_METRICS)

@@ -12,7 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from baselines.evaluation.io import atomic_path
+from baselines.runtime import optional
+from baselines.runtime.files import atomic_path
+from pairflock_env.render import SwarmRenderer, fit_limits
 
 __all__ = ["VIDEO_FORMATS", "write_episode_video"]
 
@@ -22,8 +24,6 @@ VIDEO_FORMATS = (".mp4", ".gif")
 def _view_limits(positions: np.ndarray, leader: np.ndarray, smoothing: float) -> np.ndarray:
     """Per-frame (xmin, xmax, ymin, ymax), each fitted then exponentially smoothed; the
     smoothed box is widened where needed so that no UAV leaves the picture."""
-    from pairflock_env.render import fit_limits
-
     raw = np.array([fit_limits(q, lq) for q, lq in zip(positions, leader, strict=False)])
     out = np.empty_like(raw)
     out[0] = raw[0]
@@ -66,8 +66,6 @@ def write_episode_video(
         pair_error, error_t: optional error series of pair 0 shown in each frame's title.
     Returns the path written.
     """
-    from pairflock_env.render import SwarmRenderer
-
     path = Path(path)
     ext = path.suffix.lower()
     if ext not in VIDEO_FORMATS:
@@ -102,19 +100,10 @@ def write_episode_video(
 
 
 def _write_frames(path: Path, frames: list[np.ndarray], fps: int) -> Path:
-    try:
-        import imageio.v2 as imageio
-    except ImportError:
-        raise ImportError("--video needs imageio: pip install 'pairflock-env[video]'") from None
+    imageio = optional.load("imageio.v2", "--video")
     kwargs: dict[str, Any]
     if path.suffix.lower() == ".mp4":
-        try:
-            import imageio_ffmpeg  # noqa: F401
-        except ImportError:
-            raise ImportError(
-                "mp4 video needs imageio-ffmpeg: pip install "
-                "'pairflock-env[video]' (or write a .gif)"
-            ) from None
+        optional.load("imageio_ffmpeg", "mp4 video (or write a .gif)")
         kwargs = dict(
             format="FFMPEG",
             fps=fps,

@@ -34,9 +34,9 @@ That single declaration makes ``cfg.neighbor_search``, the keyword override
 ``docs/config.md``. If its valid values depend on another field, give the kind ``needs`` (see
 ``Vector``) or add a :class:`~.schema.Rule`; if a product or ratio of fields must stay finite,
 add a :class:`~.schema.Derived`. Regenerate the docs with
-``python -m pairflock_env.config.docs docs/config.md`` (a test fails while they are stale). To
-rename a field, keep the old name in ``aliases=(...)``: user keywords then warn
-(``DeprecationWarning``) and stored dicts load silently through ``PairFlockConfig.from_dict``.
+``python -m pairflock_env.config.docs docs/config.md`` (a test fails while they are stale). A
+renamed field keeps no old keyword; if files already store the old name (a trained model's
+config), add it to :data:`pairflock_env.compat.STORED_RENAMES`, which ``from_dict`` reads.
 """
 
 from __future__ import annotations

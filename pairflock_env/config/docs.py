@@ -34,9 +34,9 @@ d_m=4)`, `gymnasium.make("pairflock/PairFlock-v0", dynamics="quadrotor")`, ...),
 attribute (`cfg.n_uavs`). `cfg.section("flocking")` returns one section's values.
 
 The defaults are the paper's values (Sec. VI-A, docs/paper-notes.md): the `paper` preset is
-the defaults, and the column of every other preset (`paper-quadrotor`, `large`) lists only
-what that preset changes. `dim` and
-`substeps` follow `dynamics` unless set. An unknown keyword raises `TypeError` with a
+the defaults, and the column of every other preset (`paper-quadrotor`, `large`,
+`crazyflie`) lists only what that preset changes. `dim` and `substeps` follow `dynamics`
+unless set. An unknown keyword raises `TypeError` with a
 did-you-mean hint; a wrong type `TypeError`; a value outside "valid" `ValueError`; each names
 the field, the value and what is valid. The rules between fields and the derived quantities
 below are checked at construction as well, so an accepted config runs: every step stays

@@ -153,6 +153,7 @@ class RecordingWriter:
         self._files: dict[str, GrowingNpy] = {}
         self._buffers: dict[str, np.ndarray] = {}
         self._info_keys: list[str] = []
+        self._info_bufs: dict[str, np.ndarray] = {}  # key: its buffer
         self._fill = 0  # steps in the buffers
         self._last_step: int | None = None
         self._last_flush = _time.monotonic()
@@ -217,6 +218,7 @@ class RecordingWriter:
         spec = {"scope": "step", "unit": "", "description": f"per-swarm info {key!r}"}
         self._add_array(f"info.{key}", f"info.{key}.npy", np.dtype(np.float64), (), spec)
         self._info_keys.append(key)
+        self._info_bufs[key] = self._buffers[f"info.{key}"]
         if self.manifest["steps"]:  # a key first given after the first flush: NaN before
             self._files[f"info.{key}"].append(np.full(self.manifest["steps"], np.nan))
         self._buffers[f"info.{key}"][: self._fill] = np.nan
@@ -251,26 +253,28 @@ class RecordingWriter:
         """
         if self.closed:
             raise ValueError(f"recording {self.path!r} is closed")
-        step = check_scalar("step", step, int, low=0)
-        if not (force or self.wants(step)) or step == self._last_step:
+        if type(step) is not int or step < 0:
+            step = check_scalar("step", step, int, low=0)
+        if not (force or step % self.every == 0) or step == self._last_step:
             return False
         given = {"step": step, "time": time, "positions": positions, "velocities": velocities}
         given.update(arrays)
-        unknown = sorted(set(given) - set(STEP_ARRAYS))
-        if unknown:
-            raise TypeError(f"unknown recording arrays {unknown}; valid: {sorted(STEP_ARRAYS)}")
-        infos = dict(infos or {})
+        if not self._files or given.keys() != self._step_buffers.keys():
+            unknown = sorted(set(given) - set(STEP_ARRAYS))
+            if unknown:
+                raise TypeError(f"unknown recording arrays {unknown}; valid: {sorted(STEP_ARRAYS)}")
+        infos = {} if infos is None else infos
         if not self._files:
             self._open_arrays(given, infos)
         self._put(given, infos)
         self._last_step = step
         self._fill += 1
-        full = self._fill == len(self._buffers["step"])
+        full = self._fill == self._chunk
         if full or _time.monotonic() - self._last_flush >= self._flush_seconds:
             self.flush()
         return True
 
-    def _put(self, given: dict[str, Any], infos: dict[str, Any]) -> None:
+    def _put(self, given: dict[str, Any], infos: Mapping[str, Any]) -> None:
         steps = self._step_buffers
         if given.keys() != steps.keys():
             raise ValueError(
@@ -280,13 +284,15 @@ class RecordingWriter:
         row = self._fill
         for name, value in given.items():
             buf = steps[name]
-            if np.shape(value) != buf.shape[1:]:
-                raise ValueError(f"{name} of shape {np.shape(value)}; expected {buf.shape[1:]}")
+            shape = value.shape if type(value) is np.ndarray else np.shape(value)
+            if shape != buf.shape[1:]:
+                raise ValueError(f"{name} of shape {shape}; expected {buf.shape[1:]}")
             buf[row] = value
-        for key in infos.keys() - self._info_keys:
-            self._add_info(key)
-        for key in self._info_keys:
-            self._buffers[f"info.{key}"][row] = _info_value(infos.get(key, math.nan), key)
+        for key in infos:
+            if key not in self._info_bufs:
+                self._add_info(key)
+        for key, buf in self._info_bufs.items():
+            buf[row] = _info_value(infos.get(key, math.nan), key)
 
     def flush(self) -> None:
         """Append the buffered steps to the files and commit them (headers, then manifest)."""

@@ -7,10 +7,10 @@ import sys
 
 from pairflock_env.replay.build import DEFAULT_MAX_MB, build_replay
 
-__all__ = ["main"]
+__all__ = ["build_parser", "main"]
 
 
-def _parser() -> argparse.ArgumentParser:
+def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="pairflock-replay",
         description="Write one self-contained HTML page that replays a recording in 3-D (or a "
@@ -29,7 +29,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = _parser().parse_args(argv)
+    args = build_parser().parse_args(argv)
     try:
         out = build_replay(
             args.recording, args.output, stride=args.stride, max_mb=args.max_mb, title=args.title

@@ -17,9 +17,12 @@ from every other UAV under the stated assumptions:
 >>> bool(out.active[0, 0]), bool(out.u[0, 0, 0] < 0)  # the filter brakes instead
 (True, True)
 
+With ``safety_scope="swarm"`` every UAV, paired or not, filters its whole command the same
+way (:class:`SwarmFilter`, docs/swarm-safety.md).
+
 :mod:`.cbf.qp` holds the exact solver of the per-agent problem, :mod:`.cbf.barrier` the
-constraints and the batched numba kernel, :mod:`.cbf.params` the parameters,
-:mod:`.stage` what the core holds.
+constraints and the batched numba kernel, :mod:`.cbf.swarm` the swarm layer,
+:mod:`.cbf.params` the parameters, :mod:`.stage` what the core holds.
 """
 
 from __future__ import annotations
@@ -38,11 +41,20 @@ from pairflock_env.safety.cbf.qp import (
     max_margin,
     project,
 )
-from pairflock_env.safety.stage import SAFETY_INFO_KEYS, CBFStage, NoFilterStage
+from pairflock_env.safety.cbf.swarm import SwarmFilter, SwarmOutput
+from pairflock_env.safety.stage import (
+    SAFETY_INFO_KEYS,
+    SAFETY_SWARM_INFO_KEYS,
+    CBFStage,
+    NoFilterStage,
+    SwarmStage,
+    cbf_stage,
+)
 
 __all__ = [
     "FILTERS",
     "SAFETY_INFO_KEYS",
+    "SAFETY_SWARM_INFO_KEYS",
     "STATUS_INFEASIBLE",
     "STATUS_NOMINAL",
     "STATUS_PROJECTED",
@@ -52,6 +64,9 @@ __all__ = [
     "SafetyFilter",
     "SafetyOutput",
     "SafetyParams",
+    "SwarmFilter",
+    "SwarmOutput",
+    "SwarmStage",
     "make_safety_stage",
     "max_margin",
     "project",
@@ -66,12 +81,18 @@ class Filter(Plugin):
     Attributes (besides :class:`~pairflock_env.config.registry.Plugin`'s):
         stage: builds what the core holds, ``stage(config, agent_uavs, num_swarms,
             partner_uavs)``, with ``apply(q, p, flock_acc, u, grid) -> u`` (B, M, dim) and
-            ``info(reset=False)`` -> arrays (B, M) or (B,) that include ``SAFETY_INFO_KEYS``.
+            ``info(reset=False)`` -> arrays (B, M) or (B,) that include ``SAFETY_INFO_KEYS``
+            (and, optionally, the per-swarm counts ``SAFETY_SWARM_INFO_KEYS``; else the
+            core counts the agents). A stage that filters every UAV's whole command sets
+            ``whole_command`` (B, N, dim) in ``apply``; the core applies it.
         info_keys: the keys its ``info`` adds to ``SAFETY_INFO_KEYS``.
+        scopes: the values of ``safety_scope`` it supports ("pairs": the paired UAVs'
+            commands; "swarm": every UAV's).
     """
 
     stage: Callable[..., Any]
     info_keys: tuple[str, ...] = ()
+    scopes: tuple[str, ...] = ("pairs",)
 
 
 def make_safety_stage(config: Any, agent_uavs: Any, num_swarms: int, partner_uavs: Any) -> Any:
@@ -85,7 +106,9 @@ FILTERS.register(
 FILTERS.register(
     Filter(
         name="cbf",
-        doc="every paired UAV keeps safety_distance from every UAV it senses (docs/safety.md)",
-        stage=CBFStage,
+        doc="every paired UAV (safety_scope='swarm': every UAV) keeps safety_distance from "
+        "every UAV it senses (docs/safety.md, docs/swarm-safety.md)",
+        stage=cbf_stage,
+        scopes=("pairs", "swarm"),
     )
 )

@@ -47,6 +47,7 @@ from collections import namedtuple
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig
+from pairflock_env.config.sections.flocking import repulsion_floor
 from pairflock_env.kernels import (
     BoundKernel,
     KernelParams,
@@ -109,6 +110,8 @@ FLOCKING = KernelParams(
         "pin_velocity_gain",
         "collision_distance2",
         "divergence_limit",
+        "floor_radius2",
+        "floor_gain",
     ),
 )
 FlockScalars = namedtuple("FlockScalars", FLOCKING.names)
@@ -117,7 +120,9 @@ _F = FLOCKING.index
 
 
 def flocking_params(cfg: PairFlockConfig) -> np.ndarray:
-    """The flocking pass's parameter vector (:data:`FLOCKING`) of a config."""
+    """The flocking pass's parameter vector (:data:`FLOCKING`) of a config (the repulsion
+    floor: :func:`~pairflock_env.config.sections.flocking.repulsion_floor`)."""
+    floor_radius2, floor_gain = repulsion_floor(cfg)
     return FLOCKING.pack(
         attraction=cfg.attraction,
         repulsion=cfg.repulsion,
@@ -128,6 +133,8 @@ def flocking_params(cfg: PairFlockConfig) -> np.ndarray:
         pin_velocity_gain=cfg.pin_velocity_gain,
         collision_distance2=cfg.collision_distance**2,
         divergence_limit=cfg.divergence_limit,
+        floor_radius2=floor_radius2,
+        floor_gain=floor_gain,
     )
 
 
@@ -143,6 +150,8 @@ def _scalars(v):
         v[_F.pin_velocity_gain],
         v[_F.collision_distance2],
         v[_F.divergence_limit],
+        v[_F.floor_radius2],
+        v[_F.floor_gain],
     )
 
 
@@ -206,8 +215,12 @@ def _pair_force(prm, d2, dq0, dq1, dq2, dp0, dp1, dp2):
     """Eqs. 13-18: the force f_ij of neighbour j on UAV i at squared distance d2, from the
     offset dq = q_j - q_i and the relative velocity dp = p_j - p_i (three components; the
     third is zero and unused in 2-D), and its weight w = a - g_r(||q_j - q_i||). Odd in
-    (dq, dp), so f_ji = -f_ij bit for bit."""
+    (dq, dp), so f_ji = -f_ij bit for bit. With the swarm layer's floor (floor_radius2 > 0)
+    the repulsion closer than rho* is at least F* rho* / rho (w multiplies q_j - q_i, of
+    length rho)."""
     w = prm.attraction - prm.repulsion * np.exp(-d2 * prm.inv_sigma2)
+    if d2 < prm.floor_radius2 and d2 > 0.0:
+        w = min(w, -prm.floor_gain / d2)
     return _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2), w
 
 

@@ -83,7 +83,8 @@ class NeighborPass:
         and the pair pass's (:func:`~pairflock_env.swarm.pair_pass.pair_pass`: eq. 28's
         shared count per pair and each agent's K nearest), also kept as :attr:`flock_out`
         and :attr:`pair_out`; the agents' pass (:mod:`pairflock_env.task.agent_pass`) turns
-        them into what a step reports.
+        them into what a step reports, and adds ``swarm_min_separation`` (B,) to the flocking
+        outputs: the smallest distance between any two UAVs, partners included (m).
         """
         if self.grid is not None:
             self.grid.build(q)

@@ -3,7 +3,11 @@ two functions that assemble the infos and keep them finite for a diverged swarm.
 
 Infos are arrays with leading axis B: per agent (B, M) (``AGENT_INFO_KEYS`` and the reward
 terms ``reward_<term>``), per swarm (B,) (``SWARM_INFO_KEYS``), plus the vehicle model's own
-(see its ``info()``). All values are true (never delayed or noisy).
+(see its ``info()``). All values are true (never delayed or noisy). Per swarm,
+``swarm_min_separation`` is the smallest distance between any two UAVs (partners included),
+whether a filter is on or not; ``swarm_filter_active`` / ``swarm_filter_infeasible`` count the
+UAVs whose command the safety stage changed for safety / for which no command met every
+constraint (the paired UAVs under ``safety_scope="pairs"``, every UAV under ``"swarm"``).
 
 A diverged swarm (``diverged``: its state ran beyond ``divergence_limit`` or turned
 non-finite) keeps its last finite observation, and its infos that describe the state (every
@@ -25,6 +29,7 @@ __all__ = [
     "LIVE_INFO_KEYS",
     "PAIR_INFO_KEYS",
     "SAFETY_INFO_KEYS",
+    "SAFETY_SWARM_INFO_KEYS",
     "SWARM_INFO_KEYS",
     "StepResult",
     "hold_last_finite",
@@ -45,13 +50,29 @@ COMMAND_INFO_KEYS = ("pair_accel", "action_clipped")
 SAFETY_INFO_KEYS = ("safety_active", "safety_correction", "safety_infeasible")
 #: per-agent info arrays, shape (B, M)
 AGENT_INFO_KEYS = (*PAIR_INFO_KEYS, *COMMAND_INFO_KEYS, *SAFETY_INFO_KEYS)
-#: the flocking pass's per-swarm quantities, (B,)
-FLOCK_INFO_KEYS = ("collisions", "largest_component", "velocity_mismatch", "velocity_mismatch_max")
+#: the neighbour pass's per-swarm quantities, (B,)
+FLOCK_INFO_KEYS = (
+    "collisions",
+    "largest_component",
+    "velocity_mismatch",
+    "velocity_mismatch_max",
+    "swarm_min_separation",
+)
+#: per-swarm counts of the safety stage, (B,): UAVs whose command it changed for safety, and
+#: UAVs with no command meeting every constraint (a stage that reports only the per-agent
+#: keys gets the counts over its agents)
+SAFETY_SWARM_INFO_KEYS = ("swarm_filter_active", "swarm_filter_infeasible")
 #: per-swarm info arrays, shape (B,)
-SWARM_INFO_KEYS = ("sim_time", *FLOCK_INFO_KEYS, "diverged")
+SWARM_INFO_KEYS = ("sim_time", *FLOCK_INFO_KEYS, *SAFETY_SWARM_INFO_KEYS, "diverged")
 #: infos that describe the step itself (clock, applied command, flag), not the state: always
 #: current, also for a diverged swarm
-LIVE_INFO_KEYS = (*COMMAND_INFO_KEYS, *SAFETY_INFO_KEYS, "sim_time", "diverged")
+LIVE_INFO_KEYS = (
+    *COMMAND_INFO_KEYS,
+    *SAFETY_INFO_KEYS,
+    "sim_time",
+    *SAFETY_SWARM_INFO_KEYS,
+    "diverged",
+)
 
 
 @dataclasses.dataclass
@@ -89,10 +110,11 @@ def make_info(
 
     Args:
         pair: the agents' pair quantities ``PAIR_INFO_KEYS`` (B, M).
-        flock: the flocking pass's outputs, ``FLOCK_INFO_KEYS`` (B,); copied.
+        flock: the neighbour pass's outputs, ``FLOCK_INFO_KEYS`` (B,); copied.
         u: the applied pair command (B, M, dim), m/s^2; clipped: (B, M) bool.
         sim_time: (B,) s (copied); diverged: (B,) bool; terms: reward terms (B, M).
-        safety: the safety stage's infos (``SAFETY_INFO_KEYS`` (B, M) and any of its own).
+        safety: the safety stage's infos (``SAFETY_INFO_KEYS`` (B, M), optionally
+            ``SAFETY_SWARM_INFO_KEYS`` (B,), and any of its own).
         pair_accel: ||u|| (B, M) when already computed (the core's agents' pass has it).
     """
     info = {k: pair[k] for k in PAIR_INFO_KEYS}
@@ -100,10 +122,13 @@ def make_info(
         np.sqrt(np.einsum("bmk,bmk->bm", u, u)) if pair_accel is None else pair_accel
     )
     info["action_clipped"] = clipped
-    info.update(safety)
+    info.update((k, v) for k, v in safety.items() if k not in SAFETY_SWARM_INFO_KEYS)
     info["sim_time"] = sim_time.copy()
     for k in FLOCK_INFO_KEYS:
         info[k] = flock[k].copy()
+    counted = ("safety_active", "safety_infeasible")
+    for k, per_agent in zip(SAFETY_SWARM_INFO_KEYS, counted, strict=True):
+        info[k] = safety[k] if k in safety else np.count_nonzero(safety[per_agent], axis=1)
     info["diverged"] = diverged
     for k, v in terms.items():
         info[f"reward_{k}"] = v

@@ -14,7 +14,8 @@ import numpy as np
 
 from pairflock_env.config.fields import Field, Real
 from pairflock_env.config.schema import Section
-from pairflock_env.dynamics import VEHICLES, Vehicle
+from pairflock_env.dynamics import VEHICLES
+from pairflock_env.dynamics.vehicle import Vehicle
 from pairflock_env.safety import FILTERS, Filter
 from pairflock_env.swarm.leader import LEADERS, Leader
 from pairflock_env.task.observations import OBSERVATIONS, ObservationField

@@ -1,7 +1,8 @@
 """The replay page in a real browser (headless Chromium through Playwright): it loads without a
 console error; after a seek, the paired UAVs are on screen where the recorded positions fall
 under the page's camera, as read back through its hook and as seen in screenshot pixels; the
-controls (scrub, play, closest pass, pick and follow) do what they say.
+controls (scrub, play, closest pass, pick and follow) do what they say; a replay of an env
+episode recorded through RecordEpisode and the replays in the docs load and play.
 
 Skips, naming the Debian package ``chromium``, where the browser is absent (fails instead
 when ``PAIRFLOCK_REQUIRE_BROWSER=1``, as CI sets it)."""
@@ -11,10 +12,13 @@ from __future__ import annotations
 import os
 import struct
 import zlib
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+import pairflock_env as pf
+from pairflock_env.envs.record import RecordEpisode
 from pairflock_env.recording import open_recording
 from pairflock_env.replay import build_replay, headless, write_demo
 
@@ -26,6 +30,8 @@ pytestmark = pytest.mark.skipif(_WHY is not None, reason=f"replay browser tests:
 SIZE = (960, 600)
 STEP = 30  # t = 1.5 s: away from the closest pass (its rings would cover UAVs)
 BACKGROUND = np.array([16, 20, 26])
+#: the replays the docs embed (docs/replays/make_replays.py writes them)
+DOCS_REPLAYS = sorted((Path(__file__).resolve().parents[2] / "docs" / "replays").glob("*.html"))
 
 
 def png_pixels(data: bytes) -> np.ndarray:
@@ -105,19 +111,20 @@ def _pixel(page, x: float, y: float) -> np.ndarray:
     return png_pixels(page.screenshot(clip=clip))[1, 1].astype(int)
 
 
-def test_seek_puts_the_pairs_where_the_camera_sees_them(page, replay):
-    rec, _ = replay
+def check_screen_positions(page, rec, step: int, least: int) -> None:
+    """After seeking to ``step``: each paired UAV is drawn where the recorded position falls
+    under the page's camera (the hook's projection and the screenshot's pixel colour)."""
     page.add_style_tag(content=".box { display: none !important; }")  # panels off the pixels
-    assert _hook(page, f"seek({STEP})") == STEP and _hook(page, "step") == STEP
+    assert _hook(page, f"seek({step})") == step and _hook(page, "step") == step
     _next_frame(page)
     q = np.zeros((rec.num_uavs, 3))
-    q[:, : rec.dim] = np.asarray(rec["positions"][STEP], np.float64)
+    q[:, : rec.dim] = np.asarray(rec["positions"][step], np.float64)
     q[:, : rec.dim] -= _hook(page, "offset")[: rec.dim]
     screen = _project(page, q)
     size = _hook(page, "canvasSize()")
     radius = np.array([_hook(page, f"uavPixelSize({i})") for i in range(rec.num_uavs)]) / 2
     decoded = np.array([_hook(page, f"uavPosition({i})") for i in range(rec.num_uavs)])
-    np.testing.assert_allclose(decoded, rec["positions"][STEP], atol=2e-3)  # quantised, < 1 mm
+    np.testing.assert_allclose(decoded, rec["positions"][step], atol=2e-3)  # quantised, < 1 mm
     checked = 0
     for i in rec.pairs.ravel():
         x, y, z = screen[i]
@@ -136,10 +143,52 @@ def test_seek_puts_the_pairs_where_the_camera_sees_them(page, replay):
         assert np.abs(got - want).max() <= 20, (i, got, want)
         assert np.abs(got - BACKGROUND).max() > 40
         checked += 1
-    assert checked >= 6, checked
-    # a spot between the UAVs is background: the pixels above are not everywhere
+    assert checked >= least, checked
+    # a spot beside the UAVs is background: the pixels above are not everywhere
     empty = screen[:, :2].min(axis=0) - 25
     assert np.abs(_pixel(page, *np.clip(empty, 2, None)) - BACKGROUND).max() <= 12
+
+
+def test_seek_puts_the_pairs_where_the_camera_sees_them(page, replay):
+    check_screen_positions(page, replay[0], STEP, least=6)
+
+
+@pytest.fixture(scope="module")
+def env_replay(tmp_path_factory):
+    """A replay of an env episode (4 pairs among 12 UAVs) recorded through RecordEpisode."""
+    folder = tmp_path_factory.mktemp("env")
+    pairs = ((0, 1), (2, 3), (4, 5), (6, 7))
+    kw = dict(n_uavs=12, pairs=pairs, init="random", max_cycles=60, d_m=3.0)
+    with RecordEpisode(pf.parallel_env(**kw), folder, controller="constant") as env:
+        env.reset(seed=2)
+        while env.agents:
+            env.step({a: np.array([0.4, -0.2]) for a in env.agents})
+    build_replay(env.recorder.paths[0], folder / "env.html")
+    return open_recording(env.recorder.paths[0]), folder / "env.html"
+
+
+def test_seek_on_an_env_recording(browser, env_replay):
+    rec, html = env_replay
+    page, errors = headless.open_replay(browser, html, SIZE)
+    check_screen_positions(page, rec, 37, least=5)
+    _hook(page, "jumpToClosest()")  # (the panels, its button among them, are hidden now)
+    cp = _hook(page, "meta.closest_pass")
+    assert _hook(page, "step") == cp["index"]
+    assert cp["distance"] == pytest.approx(float(np.min(rec["closest_distance"])), rel=1e-6)
+    assert errors == [], f"console errors: {errors}"
+    page.close()
+
+
+@pytest.mark.parametrize("html", DOCS_REPLAYS, ids=[p.stem for p in DOCS_REPLAYS])
+def test_the_docs_replays_load_and_play(browser, html):
+    page, errors = headless.open_replay(browser, html, SIZE)
+    assert _hook(page, "meta.complete") and _hook(page, "meta.controller") == "smc"
+    page.click("#pf-closest")
+    page.evaluate("window.pairflockReplay.play({stepsPerFrame: 8})")
+    page.wait_for_timeout(300)
+    assert _hook(page, "playing") and _hook(page, "fps()") > 0
+    assert errors == [], f"console errors: {errors}"
+    page.close()
 
 
 def test_scrub_play_and_speed(page, replay):

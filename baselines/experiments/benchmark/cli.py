@@ -1,7 +1,8 @@
 """The benchmark's command line: the parser, and its options resolved into a :class:`Plan`.
 
 Every check of the options happens here, before anything runs: a bad option, scenario or
-gain ends the command with argparse's usage message (exit status 2) naming it.
+gain ends the command with one line naming it and exit status 2
+(:mod:`baselines.runtime.cli`).
 """
 
 from __future__ import annotations
@@ -13,7 +14,19 @@ from pathlib import Path
 from typing import Any
 
 from baselines.evaluation.jobs import BACKENDS
+from baselines.evaluation.specs import (
+    SHORT_NAMES,
+    expand_scenarios,
+    parse_policy,
+    parse_scenario,
+    parse_value,
+    split_top_level,
+)
 from baselines.experiments.benchmark.suites import SHORTCUTS, SUITES, Suite
+from baselines.reporting.tables import SCENARIO_KEYS
+from baselines.runtime import optional
+from baselines.runtime.cli import ArgumentParser
+from pairflock_env import make_config, preset_names
 
 __all__ = ["PROG", "Plan", "build_parser", "resolve"]
 
@@ -150,7 +163,7 @@ def _output_options(out: argparse._ArgumentGroup) -> None:
 
 def build_parser(prog: str = PROG) -> argparse.ArgumentParser:
     """The benchmark's argument parser (``--help`` lists suites and spec syntax)."""
-    p = argparse.ArgumentParser(
+    p = ArgumentParser(
         prog=prog,
         description=DESCRIPTION,
         epilog=_epilog(),
@@ -206,14 +219,12 @@ def _check_numbers(args: argparse.Namespace, parser: argparse.ArgumentParser) ->
         parser.error(f"--steady-window {args.steady_window} is invalid: must be > 0")
     if args.backend == "ray":
         try:
-            import ray  # noqa: F401
-        except ImportError:
-            parser.error("--backend ray needs Ray: pip install 'pairflock-env[ray]'")
+            optional.load("ray", "--backend ray")
+        except ModuleNotFoundError as e:
+            parser.error(str(e))
 
 
 def _grid(args: argparse.Namespace, suite: Suite, parser) -> dict[str, list[Any]]:
-    from baselines.evaluation.specs import parse_value, split_top_level
-
     grid: dict[str, list[Any]] = {k: list(v) for k, v in suite.grid}
     given: dict[str, str] = {}
     for opt, field, _, _ in SHORTCUTS:
@@ -244,8 +255,6 @@ def _grid(args: argparse.Namespace, suite: Suite, parser) -> dict[str, list[Any]
 
 
 def _policies_and_seeds(args, suite: Suite, parser):
-    from baselines.evaluation.specs import parse_policy
-
     try:
         specs = [parse_policy(s) for s in (args.policies or suite.policies)]
     except (ValueError, TypeError) as e:
@@ -263,9 +272,6 @@ def _policies_and_seeds(args, suite: Suite, parser):
 
 
 def _scenarios(args, suite: Suite, preset: str, grid, parser):
-    from baselines.evaluation.specs import expand_scenarios, parse_scenario
-    from pairflock_env import make_config
-
     try:
         listed = (
             [parse_scenario(s) for s in args.scenario]
@@ -299,9 +305,6 @@ def _built_policies(specs, scenarios, configs, parser) -> dict[str, str]:
 def _table_keys(grid, suite: Suite, listed) -> tuple[tuple[str, str], ...]:
     """The tables lead with the grid axes when the scenarios are a plain grid ("| N | ..."):
     the suite's own axes, and any other axis with several values."""
-    from baselines.evaluation.specs import SHORT_NAMES
-    from baselines.reporting.tables import SCENARIO_KEYS
-
     axes = [k for k, v in grid.items() if k in dict(suite.grid) or len(v) > 1]
     if not axes or listed:
         return tuple(SCENARIO_KEYS)
@@ -337,19 +340,20 @@ def _video_target(args, specs, scenarios, parser) -> tuple[int, int] | None:
 
 def _metric_kwargs(args: argparse.Namespace, configs) -> dict[str, Any]:
     """Options of the episode metrics: the steady window, and the safety columns in every
-    run as soon as one scenario has the safety filter on (so that off and on compare)."""
+    run as soon as one scenario has the safety filter on (so that off and on compare), the
+    whole swarm's columns as soon as one has ``safety_scope="swarm"``."""
     kw: dict[str, Any] = {}
     if args.steady_window is not None:
         kw["steady_window"] = args.steady_window
     if any(c.safety_filter != "none" for c in configs):
         kw["safety_metrics"] = True
+    if any(c.safety_scope == "swarm" for c in configs):
+        kw["swarm_metrics"] = True
     return kw
 
 
 def resolve(args: argparse.Namespace, parser: argparse.ArgumentParser) -> Plan:
     """Suite defaults + options -> :class:`Plan`; any bad option ends in ``parser.error``."""
-    from pairflock_env import preset_names
-
     _check_numbers(args, parser)
     suite = SUITES[args.suite]
     preset = args.preset or suite.preset

@@ -10,9 +10,38 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from baselines.evaluation.parallel import pin_threads
+from tqdm import tqdm
+
+from baselines.evaluation.jobs import make_jobs, run_jobs
+from baselines.evaluation.specs import slug
 from baselines.experiments.benchmark.cli import PROG, Plan, build_parser, resolve
+from baselines.experiments.benchmark.figures import load_traces, make_figures, save_traces
 from baselines.experiments.benchmark.summary import summary_markdown
+from baselines.reporting.criteria import all_passed, check_paper_claims, criteria_lines
+from baselines.reporting.tables import (
+    ACCURACY_METRICS,
+    has_safety_columns,
+    has_swarm_columns,
+    safety_table,
+    summary_table,
+    swarm_table,
+)
+from baselines.reporting.video import write_episode_video
+from baselines.runtime.files import (
+    atomic_write_text,
+    dumps_stable,
+    json_rows,
+    write_csv,
+    write_json,
+)
+from baselines.runtime.folders import INCOMPLETE_MARKER, result_folder
+from baselines.runtime.record import run_record
+from pairflock_env.task.metrics import (
+    FLOCK_METRIC_DOCS,
+    METRIC_DOCS,
+    SAFETY_METRIC_DOCS,
+    SWARM_SAFETY_METRIC_DOCS,
+)
 
 __all__ = ["Results", "main", "replot", "simulate"]
 
@@ -65,10 +94,6 @@ def _ordered_rows(plan: Plan, results, columns: list[str]) -> list[dict[str, Any
 
 def simulate(plan: Plan, args) -> Results:
     """Run every (scenario, policy, seed block) job on the chosen backend."""
-    from tqdm import tqdm
-
-    from baselines.evaluation.jobs import make_jobs, run_jobs
-
     jobs = make_jobs(
         plan.configs,
         plan.specs,
@@ -112,10 +137,6 @@ def _records(plan: Plan) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
 
 
 def _write_results(out: Path, plan: Plan, res: Results, sc_records, pol_records) -> None:
-    from baselines.evaluation.io import atomic_write_text, dumps_stable, json_rows, write_csv
-    from baselines.reporting.safety_table import has_safety_columns
-    from pairflock_env.task.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
-
     metric_cols = [k for k in res.rows[0] if k not in res.columns and k != "policy"]
     write_csv(out / "results.csv", res.rows, [*res.columns, "policy", *metric_cols])
     record = {
@@ -129,6 +150,11 @@ def _write_results(out: Path, plan: Plan, res: Results, sc_records, pol_records)
             for k, v in {
                 **METRIC_DOCS,
                 **(SAFETY_METRIC_DOCS if has_safety_columns(res.rows) else {}),
+                **(
+                    {**SWARM_SAFETY_METRIC_DOCS, **FLOCK_METRIC_DOCS}
+                    if has_swarm_columns(res.rows)
+                    else {}
+                ),
             }.items()
         },
         "snapshots": plan.snapshots,
@@ -140,8 +166,6 @@ def _write_results(out: Path, plan: Plan, res: Results, sc_records, pol_records)
 def _video_path(out: Path, folder: Path, plan: Plan, res: Results, args) -> tuple[Path, Path]:
     """(where to write the video, where it ends up): inside ``out`` it goes through the
     staging ``folder`` like every other result file."""
-    from baselines.evaluation.specs import slug
-
     i, j = plan.video
     seed = res.traces[i, j]["seed"]
     if args.video == "auto":
@@ -154,8 +178,6 @@ def _video_path(out: Path, folder: Path, plan: Plan, res: Results, args) -> tupl
 
 
 def _write_video(path: Path, plan: Plan, res: Results, args) -> Path:
-    from baselines.reporting.video import write_episode_video
-
     i, j = plan.video
     tr, cfg = res.traces[i, j], plan.configs[i]
     sc, spec = plan.scenarios[i], plan.specs[j]
@@ -176,8 +198,6 @@ def _write_video(path: Path, plan: Plan, res: Results, args) -> Path:
 
 
 def _run_record(plan: Plan, res: Results, args, records, outputs, total_s: float):
-    from baselines.evaluation.io import run_record
-
     sc_records, pol_records = records
     return run_record(
         suite=plan.suite_name,
@@ -206,24 +226,21 @@ def _run_record(plan: Plan, res: Results, args, records, outputs, total_s: float
 
 
 def _write_all(plan: Plan, res: Results, args, t0: float):
-    """Every output file, through a staging folder (:func:`~baselines.evaluation.io.
+    """Every output file, through a staging folder (:func:`~baselines.runtime.folders.
     result_folder`); returns (checks, figure paths, video path, total seconds)."""
-    from baselines.evaluation.io import atomic_write_text, result_folder, write_json
-    from baselines.reporting import benchmark_figures, criteria
-
     out = plan.out
     records = _records(plan)
     checks = []
     if (plan.suite.check or args.check) and plan.preset == "paper":
-        checks = criteria.check_paper_claims(res.rows)
+        checks = check_paper_claims(res.rows)
     with result_folder(out) as folder:
         _write_results(folder, plan, res, *records)
         names = ["results.csv", "results.json", "summary.md"]
         fig_names: list[str] = []
         if plan.figures:
-            benchmark_figures.save_traces(folder / "traces.npz", res.traces)
+            save_traces(folder / "traces.npz", res.traces)
             labels = [s.label for s in plan.specs]
-            figs = benchmark_figures.make_figures(
+            figs = make_figures(
                 folder, res.rows, res.traces, records[0], labels, snapshots=plan.snapshots
             )
             fig_names = [str(p.relative_to(folder)) for p in figs]
@@ -244,9 +261,6 @@ def _write_all(plan: Plan, res: Results, args, t0: float):
 
 def replot(args, parser) -> int:
     """``--replot DIR``: redraw the figures of a finished run from its files."""
-    from baselines.evaluation.io import INCOMPLETE_MARKER
-    from baselines.reporting.benchmark_figures import load_traces, make_figures
-
     d = args.replot
     if (d / INCOMPLETE_MARKER).exists():
         parser.error(
@@ -268,13 +282,8 @@ def replot(args, parser) -> int:
 
 def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
     """The benchmark CLI (``python -m baselines.benchmark``); returns the exit status."""
-    from baselines.reporting.criteria import all_passed, criteria_lines
-    from baselines.reporting.safety_table import has_safety_columns, safety_table
-    from baselines.reporting.tables import ACCURACY_METRICS, summary_table
-
     parser = build_parser(prog)
     args = parser.parse_args(argv)
-    pin_threads()
     if args.replot is not None:
         return replot(args, parser)
     plan = resolve(args, parser)
@@ -284,6 +293,8 @@ def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
     print(summary_table(res.rows, ACCURACY_METRICS, plan.keys))
     if has_safety_columns(res.rows):
         print("\n" + safety_table(res.rows, plan.keys))
+    if has_swarm_columns(res.rows):
+        print("\n" + swarm_table(res.rows, plan.keys))
     for line in criteria_lines(checks):
         print(line)
     print(

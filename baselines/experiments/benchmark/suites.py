@@ -24,6 +24,15 @@ class Suite:
     first_seed: int = 0
 
 
+#: no filter, the pair filter, the swarm layer (docs/swarm-safety.md)
+SWARM_LAYERS = (
+    ("off", ()),
+    ("pairs", (("safety_filter", "cbf"),)),
+    ("swarm", (("safety_filter", "cbf"), ("safety_scope", "swarm"))),
+)
+#: the held-out seeds of the swarm layer's suites (never used to choose its parameters)
+SWARM_SEEDS = 71000
+
 SUITES: dict[str, Suite] = {
     "paper": Suite(
         "Sec. VI-A: sliding mode vs the normal method vs no pair term, N = 20/50/100, "
@@ -87,6 +96,42 @@ SUITES: dict[str, Suite] = {
         preset="large",
         policies=("smc", "proportional", "sb3:pair_n20_a50"),
         seeds=3,
+    ),
+    "swarm-safety": Suite(
+        "every UAV safe (safety_scope='swarm', docs/swarm-safety.md): N = 20/50/100 x "
+        "corners/random starts x smc, proportional, braking, the safe learned policy "
+        "(sb3:pair_safe_a50), no filter vs the pair filter vs the swarm layer, 100 held-out "
+        "seeds 71000-71099",
+        preset="paper",
+        policies=("smc", "proportional", "braking", "sb3:pair_safe_a50"),
+        seeds=100,
+        first_seed=SWARM_SEEDS,
+        base=(("obs_neighbors", 12),),  # what the learned policy observes
+        grid=(("n_uavs", (20, 50, 100)), ("init", ("corners", "random"))),
+        scenarios=SWARM_LAYERS,
+        snapshots=False,
+    ),
+    "swarm-safety-large": Suite(
+        "the swarm layer among 1,000 UAVs (preset 'large'): smc and the safe learned policy, "
+        "no filter vs the pair filter vs the swarm layer, 20 held-out seeds 71000-71019",
+        preset="large",
+        policies=("smc", "sb3:pair_safe_a50"),
+        seeds=20,
+        first_seed=SWARM_SEEDS,
+        base=(("obs_neighbors", 12),),
+        scenarios=SWARM_LAYERS,
+        snapshots=False,
+    ),
+    "swarm-safety-10k": Suite(
+        "the swarm layer among 10,000 UAVs (preset 'large', 10 pairs): smc, 5 held-out seeds "
+        "71000-71004 (run with --no-figures: a recorded 10,000-UAV episode takes 0.8 GB)",
+        preset="large",
+        policies=("smc",),
+        seeds=5,
+        first_seed=SWARM_SEEDS,
+        base=(("n_uavs", 10000),),
+        scenarios=(SWARM_LAYERS[2],),
+        snapshots=False,
     ),
     "quadrotor": Suite(
         "Sec. VI-B: 10 quadrotors (preset 'paper-quadrotor', docs/quadrotor.md), 5 seeds",

@@ -8,8 +8,18 @@ from typing import Any
 
 from baselines.reporting import tables
 from baselines.reporting.criteria import Check, criteria_table
-from baselines.reporting.safety_table import has_safety_columns, safety_table
-from pairflock_env.task.metrics import METRIC_DOCS, SAFETY_METRIC_DOCS
+from baselines.reporting.tables import (
+    has_safety_columns,
+    has_swarm_columns,
+    safety_table,
+    swarm_table,
+)
+from pairflock_env.task.metrics import (
+    FLOCK_METRIC_DOCS,
+    METRIC_DOCS,
+    SAFETY_METRIC_DOCS,
+    SWARM_SAFETY_METRIC_DOCS,
+)
 
 __all__ = ["summary_markdown"]
 
@@ -86,6 +96,20 @@ def summary_markdown(
             "",
         ]
         docs.update(SAFETY_METRIC_DOCS)
+    if has_swarm_columns(rows):
+        md += [
+            "## Every UAV and the flock",
+            "",
+            "Per policy and scenario over runs (one per swarm): the closest two UAVs of the "
+            "swarm, runs with no step below safety_distance, infeasible UAV-steps summed over "
+            "runs (runs with any), and the flock's quality over the steady window "
+            "(docs/swarm-safety.md).",
+            "",
+            swarm_table(rows, plan.keys),
+            "",
+        ]
+        docs.update(SWARM_SAFETY_METRIC_DOCS)
+        docs.update(FLOCK_METRIC_DOCS)
     if checks:
         md += ["## Acceptance criteria (paper)", "", *criteria_table(checks), ""]
     md += ["## Metrics", "", "| column | unit | meaning |", "|---|---|---|"]

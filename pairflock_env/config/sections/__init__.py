@@ -1,5 +1,8 @@
 """The sections of :class:`~pairflock_env.config.PairFlockConfig`, one module per section,
-named after it (``quadrotor`` is the quadrotor vehicle model's own section).
+named after it. A vehicle model, safety filter, leader or observation field declares the
+section of its own parameters beside its code (the quadrotor's:
+:mod:`pairflock_env.dynamics.quadrotor.section`) and adds it when it registers
+(:mod:`pairflock_env.config.registry`).
 
 The order of :data:`SECTIONS` is the order of the docs tables and of ``to_dict``; rules and
 derived quantities are checked as soon as their fields are. Plug-ins add their own sections
@@ -15,7 +18,6 @@ from pairflock_env.config.sections import (
     meta,
     observation,
     pair_task,
-    quadrotor,
     reward,
     robustness,
     safety,
@@ -36,7 +38,6 @@ _MODULES = (
     reward,
     observation,
     robustness,
-    quadrotor,
     safety,
 )
 

@@ -11,7 +11,7 @@ from pairflock_env.config.fields import Field, Kind, Real, invalid, sequence_ite
 from pairflock_env.config.limits import MAX_DISTANCE, MAX_GAIN
 from pairflock_env.config.schema import Derived, Rule, Section
 
-__all__ = ["DERIVED", "RULES", "SECTIONS", "repulsion_sigma2"]
+__all__ = ["DERIVED", "RULES", "SECTIONS", "repulsion_floor", "repulsion_peak", "repulsion_sigma2"]
 
 
 class Pinning(Kind):
@@ -55,6 +55,35 @@ class Pinning(Kind):
 def repulsion_sigma2(v: Any) -> float:
     """sigma^2 of the repulsion, chosen so that g_r(spacing) = attraction (m^2)."""
     return v.spacing**2 / math.log(v.repulsion / v.attraction)
+
+
+def repulsion_peak(v: Any) -> float:
+    """rho* (m): the distance in (0, spacing) at which the repulsion between two UAVs,
+    F(rho) = rho (b_r exp(-rho^2 / sigma^2) - a), is strongest; closer than rho* it weakens
+    as they approach. x = rho*^2 / sigma^2 solves b_r e^-x (1 - 2 x) = a on (0, 1/2), where
+    the left side falls (bisection to the last bit)."""
+    a, br, s2 = v.attraction, v.repulsion, repulsion_sigma2(v)
+    lo, hi = 0.0, 0.5
+    while True:
+        mid = 0.5 * (lo + hi)
+        if not lo < mid < hi:
+            return math.sqrt(lo * s2)
+        if br * math.exp(-mid) * (1.0 - 2.0 * mid) > a:
+            lo = mid
+        else:
+            hi = mid
+
+
+def repulsion_floor(v: Any) -> tuple[float, float]:
+    """(rho*^2, F* rho*) of the swarm layer's repulsion floor (docs/swarm-safety.md), with
+    F* = F(rho*): closer than rho* the repulsion is held at F* rho* / rho instead of
+    fading; (0, 0) when the floor is off (``safety_scope`` "pairs" or
+    ``swarm_repulsion_floor`` False): the paper's law."""
+    if v.safety_scope != "swarm" or not v.swarm_repulsion_floor:
+        return 0.0, 0.0
+    rho = repulsion_peak(v)
+    F = rho * (v.repulsion * math.exp(-rho * rho / repulsion_sigma2(v)) - v.attraction)
+    return rho * rho, F * rho
 
 
 _GAIN = Real(0.0, MAX_GAIN)
@@ -145,6 +174,16 @@ DERIVED = (
         1e30,
         "1/m^2",
         "the exponent scale of the repulsion in the flocking pass",
+    ),
+    Derived(
+        "rho*",
+        ("spacing", "attraction", "repulsion"),
+        repulsion_peak,
+        0.0,
+        MAX_DISTANCE,
+        "m",
+        "where the repulsion rho (b_r exp(-rho^2/sigma^2) - a) peaks; below it the swarm "
+        "scope's repulsion floor holds it at F(rho*) rho*/rho (docs/swarm-safety.md)",
     ),
     Derived(
         "r^2",

@@ -1,11 +1,12 @@
 """Section ``safety``: the optional CBF safety filter on the paired UAVs' commands
-(:mod:`pairflock_env.safety`, docs/safety.md)."""
+(:mod:`pairflock_env.safety`, docs/safety.md), and its swarm scope, where every UAV filters
+its whole command (:mod:`pairflock_env.safety.cbf.swarm`, docs/swarm-safety.md)."""
 
 from __future__ import annotations
 
 from typing import Any
 
-from pairflock_env.config.fields import Field, OrNone, Real
+from pairflock_env.config.fields import Choice, Field, Flag, OrNone, Real
 from pairflock_env.config.limits import MAX_DISTANCE, MAX_GAIN, MAX_REACTION_TIME
 from pairflock_env.config.registry import FILTERS, VEHICLES, Registered
 from pairflock_env.config.schema import Rule, Section
@@ -16,12 +17,17 @@ __all__ = [
     "DECAY",
     "OTHER_SHARE",
     "RULES",
+    "SCOPES",
     "SECTIONS",
     "SENSING_RADIUS",
+    "SWARM_ACCEL_LIMIT",
     "brake_accel",
     "decay",
     "other_accel",
     "reaction_time",
+    "swarm_accel_limit",
+    "swarm_brake_accel",
+    "swarm_sensing_radius",
 ]
 
 #: share of ``pair_accel_limit`` a paired UAV counts on for braking when unset
@@ -33,14 +39,20 @@ OTHER_SHARE = 0.4
 DECAY = 0.5
 #: default sensing radius R_s (m): the smallest of 20-120 m with which no filtered tuning run
 #: (seeds 2000-2019: the safe generalist at pair_accel_limit 50, sliding mode, the
-#: proportional method and the generalist at 1000) had an infeasible step (docs/safety.md)
+#: proportional method and the generalist at 1000) had an infeasible step (docs/safety-results.md)
 SENSING_RADIUS = 100.0
+#: what the filter covers: the paired UAVs' pair commands, or every UAV's whole command
+SCOPES = ("pairs", "swarm")
+#: default bound U_s on an unpaired UAV's whole command under the swarm scope (m/s^2, 2 g):
+#: the paper's flocking command peaks at 10-36 m/s^2 only in the first step of a start with
+#: UAVs 2 m apart, and stays below 9.2 m/s^2 after 5 s at N = 20-100 (docs/swarm-safety.md)
+SWARM_ACCEL_LIMIT = 20.0
 
 # A vehicle model that realises at most some acceleration, and realises it late (the
 # quadrotor's attitude loop), sets the unset parameters from its own physics
 # (pairflock_env.dynamics.Vehicle: accel_bound, reaction_time, safety_decay). For the
 # quadrotor they reproduce the setting selected on the tuning seeds 60000-60099 of the
-# paper-quadrotor scenario (alpha 6, A_o 2, tau 0.1 s, lambda 0.1; docs/safety.md).
+# paper-quadrotor scenario (alpha 6, A_o 2, tau 0.1 s, lambda 0.1; docs/safety-results.md).
 #: with a vehicle bound, A_o is at most this share of it (alpha at most all of it)
 BOUND_OTHER_SHARE = 1.0 / 3.0
 
@@ -69,6 +81,28 @@ def other_accel(v: Any) -> float:
     return o if bound is None else min(o, BOUND_OTHER_SHARE * bound)
 
 
+def swarm_accel_limit(v: Any) -> float:
+    """U_s (m/s^2): ``swarm_accel_limit``, or ``SWARM_ACCEL_LIMIT`` (at most the vehicle's
+    bound)."""
+    if v.swarm_accel_limit is not None:
+        return v.swarm_accel_limit
+    bound = _bound(v)
+    return SWARM_ACCEL_LIMIT if bound is None else min(SWARM_ACCEL_LIMIT, bound)
+
+
+def swarm_brake_accel(v: Any) -> float:
+    """alpha_s (m/s^2): ``swarm_brake_accel``, or ``BRAKE_SHARE x`` :func:`swarm_accel_limit`."""
+    if v.swarm_brake_accel is not None:
+        return v.swarm_brake_accel
+    return BRAKE_SHARE * swarm_accel_limit(v)
+
+
+def swarm_sensing_radius(v: Any) -> float:
+    """The radius (m) within which two unpaired UAVs constrain each other: the field, or the
+    flocking radius r (what a UAV perceives in eq. 2)."""
+    return v.radius if v.swarm_sensing_radius is None else v.swarm_sensing_radius
+
+
 def reaction_time(v: Any) -> float:
     """tau (s): ``safety_reaction_time``, or the vehicle's lag (0 for the particle)."""
     if v.safety_reaction_time is not None:
@@ -91,7 +125,8 @@ SAFETY = Section(
     "A decentralised braking-distance CBF filter between the decoded pair command and the "
     "vehicle model (pairflock_env.safety, docs/safety.md): each paired UAV replaces its pair "
     "command u by the nearest one with ||u|| <= pair_accel_limit (a ball, not the action "
-    "box) that keeps safety_distance from every UAV it senses. Off by default.",
+    'box) that keeps safety_distance from every UAV it senses; with safety_scope="swarm" '
+    "every UAV filters its whole command (docs/swarm-safety.md). Off by default.",
     (
         Field(
             "safety_filter",
@@ -163,6 +198,53 @@ SAFETY = Section(
             "Discrete barrier rate lambda: H(k+1) >= (1 - lambda) H(k); 1 lets the state "
             "reach the braking curve in one step.",
         ),
+        Field(
+            "safety_scope",
+            Choice(SCOPES),
+            "pairs",
+            "",
+            '"pairs": the filter changes the paired UAVs\' pair commands; "swarm": every UAV, '
+            "paired or not, replaces its whole command (flocking + pair term) by the nearest "
+            "one that keeps safety_distance from every UAV it senses, the responsibility for "
+            "each pair shared by brake capacity, and the flocking repulsion gets its floor "
+            '(docs/swarm-safety.md). Needs safety_filter="cbf".',
+        ),
+        Field(
+            "swarm_accel_limit",
+            OrNone(Real(0.0, MAX_GAIN, lo_open=True), "20; at most the vehicle's bound"),
+            None,
+            "m/s^2",
+            "U_s: the bound on an unpaired UAV's whole command under the swarm scope (a ball); "
+            "the layer's output always satisfies it. Paired UAVs keep ||a - f|| <= "
+            "pair_accel_limit. The quadrotor's bound is min(quad_accel_limit, quad_gravity "
+            "tan quad_tilt_limit).",
+        ),
+        Field(
+            "swarm_brake_accel",
+            OrNone(Real(0.0, MAX_GAIN, lo_open=True), "0.8 swarm_accel_limit"),
+            None,
+            "m/s^2",
+            "alpha_s: the line-of-sight deceleration an unpaired UAV counts on when it must "
+            "brake (swarm scope); at most swarm_accel_limit. Two UAVs split each constraint "
+            "in proportion to their brake accelerations.",
+        ),
+        Field(
+            "swarm_sensing_radius",
+            OrNone(Real(1e-3, MAX_DISTANCE), "radius"),
+            None,
+            "m",
+            "Two unpaired UAVs constrain each other closer than this (swarm scope; rows with "
+            "a paired UAV use safety_sensing_radius); above safety_distance + safety_margin.",
+        ),
+        Field(
+            "swarm_repulsion_floor",
+            Flag(),
+            True,
+            "",
+            "Swarm scope: below the distance rho* where the flocking repulsion peaks, it grows "
+            "as F* rho* / rho instead of fading (a change to eqs. 13-16, docs/swarm-safety.md); "
+            "without it a pressed flock jams against the barrier. No effect under pairs.",
+        ),
     ),
 )
 
@@ -195,14 +277,30 @@ def _radius_beyond_distance(v: Any) -> str | None:
     return None
 
 
-def _derived_reaction_time_in_range(v: Any) -> str | None:
-    if v.safety_filter == "none" or v.safety_reaction_time is not None:
-        return None
-    tau = reaction_time(v)
-    if not tau <= MAX_REACTION_TIME:
+def _scope_supported(v: Any) -> str | None:
+    scopes = FILTERS[v.safety_filter].scopes
+    if v.safety_scope not in scopes:
+        able = [name for name in FILTERS if v.safety_scope in FILTERS[name].scopes]
         return (
-            f"makes the unset safety_reaction_time (the {v.dynamics} model's lag) {tau:g} s, "
-            f"above the {MAX_REACTION_TIME:g} s it may be; set safety_reaction_time"
+            f"must be one that safety_filter={v.safety_filter!r} supports ({', '.join(scopes)}); "
+            f"safety_scope={v.safety_scope!r} needs safety_filter in {able}"
+        )
+    return None
+
+
+def _swarm_brake_within(v: Any) -> str | None:
+    a, U = swarm_brake_accel(v), swarm_accel_limit(v)
+    if not a <= U:
+        return f"must be <= swarm_accel_limit ({U:g} m/s^2; None: 20, at most the vehicle's bound)"
+    return None
+
+
+def _swarm_radius_beyond(v: Any) -> str | None:
+    r, D = swarm_sensing_radius(v), v.safety_distance + v.safety_margin
+    if not r > D:
+        return (
+            f"must keep the swarm sensing radius ({r:g} m; None: radius) above "
+            f"safety_distance + safety_margin ({D:g} m)"
         )
     return None
 
@@ -229,8 +327,18 @@ RULES = (
         "safety_sensing_radius > safety_distance + safety_margin",
     ),
     Rule(
-        ("safety_reaction_time", "safety_filter", "dynamics"),
-        _derived_reaction_time_in_range,
-        "the vehicle's derived safety_reaction_time (quadrotor: 1.5 / quad_attitude_freq) <= 10 s",
+        ("safety_scope", "safety_filter"),
+        _scope_supported,
+        "safety_scope is one the filter supports (swarm: cbf)",
+    ),
+    Rule(
+        ("swarm_brake_accel", "swarm_accel_limit", "dynamics"),
+        _swarm_brake_within,
+        "swarm_brake_accel <= swarm_accel_limit (each default or set)",
+    ),
+    Rule(
+        ("swarm_sensing_radius", "radius", "safety_distance", "safety_margin"),
+        _swarm_radius_beyond,
+        "swarm_sensing_radius (default radius) > safety_distance + safety_margin",
     ),
 )

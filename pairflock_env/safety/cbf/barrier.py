@@ -37,7 +37,7 @@ from pairflock_env.safety.cbf.kernels import BARRIER, _filter_kernel
 from pairflock_env.safety.cbf.params import SafetyParams
 from pairflock_env.swarm.grid import NeighborGrid
 
-__all__ = ["SafetyFilter", "SafetyOutput", "safety_filter"]
+__all__ = ["SafetyFilter", "SafetyOutput", "grid_arrays", "safety_filter"]
 
 
 @dataclasses.dataclass
@@ -177,27 +177,12 @@ class SafetyFilter:
             out = self.allocate(B, D)
         elif out.u.shape != shape:
             raise ValueError(f"out.u has shape {out.u.shape}, expected {shape}")
-        g = self._grid(grid, q)
+        g = grid_arrays(grid, q)
         o = out
         ag, mates = self.agents, self.partners
         use = grid is not None
         _filter_kernel(q, p, f, un, ag, mates, self.cooperative, self._pr, use, g, *o.arrays())
         return out
-
-    @staticmethod
-    def _grid(grid: NeighborGrid | None, q: np.ndarray):
-        """The grid's arrays for the kernel (a 1-UAV placeholder when there is none)."""
-        if grid is None:
-            return _no_grid()
-        if not isinstance(grid, NeighborGrid):
-            raise TypeError(f"grid={grid!r} is invalid: must be a NeighborGrid or None")
-        built = grid.positions
-        if built is None or built.shape != q.shape or not (built is q or np.array_equal(built, q)):
-            raise ValueError(
-                "grid is invalid: it must be built from the positions q passed here "
-                "(NeighborGrid.build(q))"
-            )
-        return grid.arrays
 
     @staticmethod
     def _partners(partners, agents: np.ndarray, n_uavs: int) -> np.ndarray:
@@ -225,6 +210,22 @@ class SafetyFilter:
         if a.ndim != 3 or (shape is not None and a.shape != shape):
             raise ValueError(f"{name} has shape {a.shape}, expected {shape or '(B, N, dim)'}")
         return np.ascontiguousarray(a, dtype=np.float64)
+
+
+def grid_arrays(grid: NeighborGrid | None, q: np.ndarray):
+    """The arrays of ``grid`` for a filter kernel (a 1-UAV placeholder when it is None);
+    ``ValueError`` unless the grid was built from these positions ``q``."""
+    if grid is None:
+        return _no_grid()
+    if not isinstance(grid, NeighborGrid):
+        raise TypeError(f"grid={grid!r} is invalid: must be a NeighborGrid or None")
+    built = grid.positions
+    if built is None or built.shape != q.shape or not (built is q or np.array_equal(built, q)):
+        raise ValueError(
+            "grid is invalid: it must be built from the positions q passed here "
+            "(NeighborGrid.build(q))"
+        )
+    return grid.arrays
 
 
 @functools.cache

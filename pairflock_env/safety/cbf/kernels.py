@@ -454,7 +454,7 @@ _FAR_ROUND = 64.0 * 2.0**-52
 def _far_radius(W, far):
     """The distance from which :func:`_far` skips a UAV closing at relative speed W at
     most; non-decreasing in W, in floating point too (each step is)."""
-    Ds, T, tau, lam, beta, g, S, epsm, k1, k2, _, k3, R = far
+    Ds, T, tau, lam, beta, g, S, epsm, k1, k2, _, k3, R, _, _ = far
     S = S + k3 * (R + (T + 2.0 * tau) * W + tau * epsm)  # covers the rounding of sigma_min
     Q = max(lam * (W - beta) + T * S + epsm, 0.0)
     Dm = (T + tau) * W + tau * epsm + g * S
@@ -474,34 +474,53 @@ def _far(d2, w2, far):
 
 
 @njit(cache=True, nogil=True, _nrt=False, inline="always")
+def _far_constants(Ds, T, c, lam, tau, a, S, Sa, R, share):
+    """The constants of :func:`_far` (and of a row of :func:`_constrain_one`) for a barrier
+    at distance Ds with alpha_ij = a whose row is dropped when sigma_min <= -S, where
+    |a_i - a_j| <= Sa (the rotation term), the agent's share of the relative condition is
+    ``share`` and R bounds the distances the skip is used at (its rounding pad)."""
+    den = 2.0 * a * lam * lam  # underflows only for a subnormal alpha_ij: then skip none
+    cT2 = c * T * T
+    return (
+        Ds, T, tau, lam, (c - 0.5) * a * T, cT2 + tau * T, S,
+        2.0 * (1.0 - c) * T * Sa, 1.0 / den if den > 0.0 else np.inf, 2.0 / lam, a,
+        _FAR_ROUND / cT2 if cT2 > 0.0 else np.inf, R, Sa, share,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, _nrt=False, inline="always")
 def _far_terms(pr, fn, coop):
-    """The constants of :func:`_far` for an agent whose flocking command has norm fn, against
-    an unpaired UAV (``coop`` False) or another filtered one (True); entry 6 is S, the bound
-    on the relative acceleration, and entry 10 the barrier's alpha_ij."""
+    """:func:`_far_constants` of an agent of the pair filter whose flocking command has norm
+    fn, against an unpaired UAV (``coop`` False) or another filtered one (True); entry 6 is
+    S, the bound on the relative acceleration, and entry 10 the barrier's alpha_ij."""
     Ds, alpha, A_o = pr[_B.barrier_distance], pr[_B.brake_accel], pr[_B.other_accel]
     lam, T, c, U = pr[_B.decay], pr[_B.dt], pr[_B.position_gain], pr[_B.accel_limit]
     tau = pr[_B.reaction_time]
     # the barrier's alpha_ij, and S: the constraint is dropped when sigma_min <= -S
     a = 2.0 * alpha if coop else alpha - A_o
     S = 2.0 * (fn + U) if coop else fn + U + A_o
-    den = 2.0 * a * lam * lam  # underflows only for a subnormal alpha_ij: then skip none
-    cT2 = c * T * T
-    return (
-        Ds, T, tau, lam, (c - 0.5) * a * T, cT2 + tau * T, S,
-        2.0 * (1.0 - c) * T * S, 1.0 / den if den > 0.0 else np.inf, 2.0 / lam, a,
-        _FAR_ROUND / cT2 if cT2 > 0.0 else np.inf, np.sqrt(pr[_B.sensing_radius2]),
-    )  # fmt: skip
+    # alpha / (alpha + alpha) is 0.5 exactly: each of two filtered UAVs takes half
+    share = alpha / a if coop else 1.0
+    return _far_constants(Ds, T, c, lam, tau, a, S, S, np.sqrt(pr[_B.sensing_radius2]), share)
 
 
 @njit(cache=True, nogil=True, _nrt=False, inline="always")  # see _constraints
 def _constrain_one(
-    b, i, j, mate, q, p, f, fn, coop, Ds, A_o, R2, lam, T, c, tau, U, G, rhs, n, K, hmin,
+    b, i, j, mate, q, p, f, kind_of, coop, Ds, A_o, R2, lam, T, c, tau, U, G, rhs, n, K, hmin,
     far_o, far_c, prune, Rs2,
 ):  # fmt: skip
     """Agent i's constraint against UAV j, appended to G, rhs when it binds; returns (K, hmin,
     ok), ok False for a non-finite pair (the caller then stops). UAVs other than ``mate``
     at squared distance >= R2 are left out; ``Rs2`` is the sensing radius squared, within
-    which the far-UAV skip applies."""
+    which the far-UAV skip applies.
+
+    Its variable is x = a_i - f (f: the centre of its ball ||x|| <= U). j's row uses
+    ``far_c`` where ``kind_of[j]``, else ``far_o`` (:func:`_far_constants`: alpha_ij, the
+    rotation bound and i's share). A j that filters too (``coop[j]``) takes the rest of the
+    relative condition: i asks n . a_i >= share sigma_min. Else j is assumed to accelerate
+    towards i at most A_o and i asks n . a_i >= sigma_min + A_o. The pair filter passes its
+    agents as both ``kind_of`` and ``coop`` (share 1/2); the swarm layer
+    (:mod:`.swarm`) has every UAV filter, weighted by brake capacity."""
     D = q.shape[2]
     d2 = 0.0
     w2 = 0.0
@@ -512,7 +531,7 @@ def _constrain_one(
         return K, hmin, False
     if d2 >= R2 and j != mate:
         return K, hmin, True
-    kind = far_c if coop[j] else far_o
+    kind = far_c if kind_of[j] else far_o
     if prune and d2 < Rs2 and _far(d2, w2, kind):  # the partner beyond R_s: always evaluated
         return K, hmin, True
     d = np.sqrt(d2)
@@ -528,13 +547,13 @@ def _constrain_one(
     a = kind[10]  # the barrier's alpha_ij
     eps = 0.0
     if c < 1.0:  # rotation of n within the step (docs/safety.md)
-        amax = kind[6]  # the bound on the relative acceleration
+        amax = kind[13]  # the bound on the relative acceleration
         den = d + min(d, Ds)  # 0 for coincident UAVs: n may then turn by anything (cap 2)
         geo = min(2.0, 2.0 * T * (np.sqrt(w2) + c * T * amax) / den) if den > 0.0 else 2.0
         eps = (1.0 - c) * T * amax * geo
     H, smin = _sigma_min(d - Ds, v, eps, a, T, c, lam, tau)
     hmin = min(hmin, H)
-    need = 0.5 * smin if coop[j] else smin + A_o
+    need = kind[14] * smin if coop[j] else smin + A_o
     if need - nf <= -U:
         return K, hmin, True  # implied by ||u|| <= U
     for k in range(D):
@@ -594,7 +613,7 @@ def _constraints(b, i, mate, q, p, f, coop, pr, G, rhs, n, grid, g, hits, pt, vo
         if j == i:
             continue
         K, hmin, ok = _constrain_one(
-            b, i, j, mate, q, p, f, fn, coop, Ds, A_o, r2, lam, T, c, tau, U, G, rhs,
+            b, i, j, mate, q, p, f, coop, coop, Ds, A_o, r2, lam, T, c, tau, U, G, rhs,
             n, K, hmin, far_o, far_c, prune, R2,
         )  # fmt: skip
         if not ok:

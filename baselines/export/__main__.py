@@ -1,0 +1,19 @@
+"""``python -m baselines.export sb3:<model> --out DIR`` / ``pairflock-export``: the exporter
+(:mod:`baselines.export.cli`), on one thread per process."""
+
+import sys
+from collections.abc import Sequence
+
+from baselines.runtime.threads import pin_threads
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Pin the threads, then run the command; returns the exit status."""
+    pin_threads()  # before numpy loads
+    from baselines.export.cli import main as run
+
+    return run(argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

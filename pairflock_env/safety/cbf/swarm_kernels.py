@@ -1,0 +1,340 @@
+"""The swarm layer's numba kernels (``safety_scope="swarm"``, docs/swarm-safety.md): every
+UAV of every swarm filters its whole command with the pair filter's barrier rows, exact
+solver and far-UAV skip (:mod:`.kernels`).
+
+UAV i's problem, in its variable x = a_i - c_i (c_i = 0 for an unpaired UAV; its flocking
+command f_i for a paired one, so that a paired UAV keeps the pair filter's variable and
+ball):
+
+    minimise ||x - x_nom||^2   subject to   ||x|| <= U_i   and, for every UAV j it senses,
+    n_ij . (c_i + x) >= alpha_i / (alpha_i + alpha_j) sigma_min(e_ij, v_ij; alpha_i + alpha_j)
+
+j writes the same row with n_ji = -n_ij and its own share, so the two add up to the pair
+filter's relative condition n_ij . (a_i - a_j) >= sigma_min: the reciprocal split of Wang,
+Ames and Egerstedt, weighted by brake capacity alpha. Two unpaired UAVs sense each other
+within ``swarm_radius2``, a pair of UAVs of which one is paired within ``pair_radius2`` (a
+partner at any distance): both sides of a pair see the same rows. Each search is shortened
+to where the far-UAV skip would drop every UAV at the swarm's speeds (relative to its mean
+velocity). An unpaired UAV's paired candidates come from a contact list that each paired UAV
+fills with one search, so a swarm costs O(N + M k), not O(N M).
+
+The rows come from :func:`~.kernels._constrain_one` and the solver is
+:func:`~.kernels._solve_ws`; numba's on-disk cache keys a compiled function on its own file
+only, so after editing :mod:`.kernels` or ``swarm/grid.py``, clear the numba cache (the
+``__pycache__`` folders) before trusting a run of this layer.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pairflock_env.kernels import KernelParams, jit_inline, jit_kernel
+from pairflock_env.safety.cbf.kernels import (
+    STATUS_INFEASIBLE,
+    WS_MAX,
+    _constrain_one,
+    _far_constants,
+    _far_radius,
+    _grid_usable,
+    _margin,
+    _put,
+    _solve_ws,
+)
+from pairflock_env.swarm.grid import within_radius
+
+__all__ = ["SWARM", "VEC_ROWS", "swarm_kernel"]
+
+#: the swarm layer's parameters (squared radii: the kernel compares squared distances;
+#: ``skip_far`` 1 drops the UAVs too far to bind, 0 evaluates every sensed UAV)
+SWARM = KernelParams(
+    "Swarm",
+    (
+        "barrier_distance",
+        "dt",
+        "position_gain",
+        "decay",
+        "reaction_time",
+        "pair_radius2",
+        "swarm_radius2",
+        "skip_far",
+    ),
+)
+_S = SWARM.index
+
+#: rows of the (VEC_ROWS, 3) float scratch: a query point, UAV i's centre c_i, the solver's
+#: candidate and best point, x_nom, x, a row's normal, the swarm's mean velocity
+_PT, _CTR, _CAND, _BEST, _XIN, _XOUT, _NV, _CBAR = range(8)
+VEC_ROWS = 8
+#: relative pad of the drop threshold S over the rounding of (U + |c|) (alpha_ij / alpha_i)
+_S_PAD = 1e-12
+
+
+@jit_inline
+def _far_of(pr, a_i, a_j, U_i, cn, A_i, A_j):
+    """:func:`~.kernels._far_constants` of UAV i (brake a_i, ball U_i around a centre of norm
+    cn, |a_i| <= A_i) against a UAV of brake a_j with |a_j| <= A_j. i's row against it
+    needs n . x >= share sigma_min - n . c_i, which the ball implies once share sigma_min
+    <= -(U_i + cn), i.e. sigma_min <= -S with S = (U_i + cn) (a_i + a_j) / a_i."""
+    a = a_i + a_j
+    S = (U_i + cn) * (a / a_i) * (1.0 + _S_PAD)
+    R = np.sqrt(max(pr[_S.pair_radius2], pr[_S.swarm_radius2]))
+    Ds, T, c = pr[_S.barrier_distance], pr[_S.dt], pr[_S.position_gain]
+    return _far_constants(Ds, T, c, pr[_S.decay], pr[_S.reaction_time], a, S, A_i + A_j, R, a_i / a)
+
+
+@jit_kernel
+def _class_values(paired, alpha, bound):
+    """The brake and the bound of the unpaired UAVs and the brake of the paired ones (each
+    class shares its values; 1 for a class with no UAV)."""
+    a_u, U_u, a_p = 1.0, 1.0, 1.0
+    for j in range(paired.shape[0] - 1, -1, -1):
+        if paired[j]:
+            a_p = alpha[j]
+        else:
+            a_u, U_u = alpha[j], bound[j]
+    return a_u, U_u, a_p
+
+
+@jit_kernel
+def _abounds(f, b, paired, bound, abound):
+    """Each UAV's bound on its own command into ``abound`` (U_j for an unpaired UAV, |f_j| +
+    U_j for a paired one); returns the largest of each class (Au, Ap)."""
+    Au, Ap = 0.0, 0.0
+    for j in range(f.shape[1]):
+        if paired[j]:
+            s = 0.0
+            for k in range(f.shape[2]):
+                s += f[b, j, k] * f[b, j, k]
+            abound[j] = np.sqrt(s) + bound[j]
+            Ap = max(Ap, abound[j])
+        else:
+            abound[j] = bound[j]
+            Au = max(Au, abound[j])
+    return Au, Ap
+
+
+@jit_kernel
+def _speeds(p, b, paired, cbar):
+    """The swarm's mean velocity into ``cbar``; returns vo, the largest |p_j - cbar| of its
+    unpaired UAVs (with a UAV's own, it bounds a relative speed; inf if a velocity is not
+    finite), and the pad for their rounding, 1e-9 |cbar|."""
+    N, D = p.shape[1], p.shape[2]
+    for k in range(3):
+        cbar[k] = 0.0
+    for j in range(N):
+        for k in range(D):
+            cbar[k] += p[b, j, k]
+    c2 = 0.0
+    for k in range(D):
+        cbar[k] /= N
+        c2 += cbar[k] * cbar[k]
+    vo = 0.0
+    for j in range(N):
+        s2 = 0.0
+        for k in range(D):
+            s2 += (p[b, j, k] - cbar[k]) ** 2
+        if not np.isfinite(s2):
+            return np.inf, np.inf
+        if not paired[j]:
+            vo = max(vo, s2)
+    return np.sqrt(vo), 1e-9 * np.sqrt(c2)
+
+
+@jit_inline
+def _own_speed(p, b, i, cbar):
+    """|p_i - cbar|."""
+    s2 = 0.0
+    for k in range(p.shape[2]):
+        s2 += (p[b, i, k] - cbar[k]) ** 2
+    return np.sqrt(s2)
+
+
+@jit_inline
+def _candidates(q, b, pt, r2, exclude, use_grid, g, hits):
+    """The UAVs of swarm b closer than sqrt(r2) to ``pt`` (``exclude`` left out) into
+    ``hits``, in increasing index, from the grid or a scan of all N; returns their count."""
+    if use_grid:
+        return within_radius(q, b, pt, r2, exclude, g, hits)
+    n = 0
+    for j in range(q.shape[1]):
+        d2 = 0.0
+        for k in range(q.shape[2]):
+            x = q[b, j, k] - pt[k]
+            d2 += x * x
+        if j != exclude and d2 < r2:
+            hits[n] = j
+            n += 1
+    return n
+
+
+@jit_kernel
+def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, use_grid, g, hits, vec,
+              far_up, a_u, Au, spd, cstart, cnt, clist):  # fmt: skip
+    """For every unpaired UAV i, the paired UAVs j close enough for the row of (i, j) to
+    bind from either side, in agent order, as clist[cstart[i]:cstart[i + 1]]: each paired
+    UAV searches once, out to the larger far radius of both sides (j's, and ``far_up``, an
+    unpaired UAV's against a paired one; at most the pairs' sensing radius) at relative
+    speed |p_j - cbar| + vo. ``spd`` = (vo, pad)."""
+    N, D = q.shape[1], q.shape[2]
+    vo, pad = spd
+    cbar, pt = vec[_CBAR], vec[_PT]
+    for i in range(N + 1):
+        cstart[i] = 0
+    for fill in range(2):  # count, then fill
+        for m in range(agents.shape[0]):
+            j = agents[m]
+            cn = abound[j] - bound[j]
+            W = (_own_speed(p, b, j, cbar) + vo) * (1.0 + 1e-9) + pad
+            far_j = _far_of(pr, alpha[j], a_u, bound[j], cn, abound[j], Au)
+            r = max(_far_radius(W, far_j), _far_radius(W, far_up))
+            r2 = pr[_S.pair_radius2]
+            if pr[_S.skip_far] != 0.0:
+                r2 = min(r2, r * r)
+            for k in range(D):
+                pt[k] = q[b, j, k]
+            nh = _candidates(q, b, pt, r2, j, use_grid, g, hits)
+            for t in range(nh):
+                i = hits[t]
+                if paired[i]:
+                    continue
+                if fill == 0:
+                    cstart[i + 1] += 1
+                else:
+                    clist[cnt[i]] = j
+                    cnt[i] += 1
+        if fill == 0:
+            for i in range(N):
+                cstart[i + 1] += cstart[i]
+                cnt[i] = cstart[i]
+
+
+@jit_inline
+def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, use_grid, g, hits, vec, spd, G, rhs):
+    """UAV i's rows into G, rhs: the unpaired UAVs within its shortened radius, then the
+    paired ones (every agent, for a paired i; its contact list, for an unpaired one).
+    ``far_u`` / ``far_p``: i's far constants against the two classes; ``ints`` = (paired,
+    mate, agents, coop, cstart, clist); ``spd`` = (vo, pad). Returns (K, min H, ok)."""
+    paired, mate, agents, coop, cstart, clist = ints
+    vo, pad = spd
+    D = q.shape[2]
+    Ds, T, c, lam = pr[_S.barrier_distance], pr[_S.dt], pr[_S.position_gain], pr[_S.decay]
+    tau, prune = pr[_S.reaction_time], pr[_S.skip_far] != 0.0
+    R2p = pr[_S.pair_radius2]
+    Rs2 = max(R2p, pr[_S.swarm_radius2])
+    r2 = R2p if paired[i] else pr[_S.swarm_radius2]
+    if prune:  # out to where the skip drops every unpaired UAV (W: a relative speed bound)
+        W = (_own_speed(p, b, i, vec[_CBAR]) + vo) * (1.0 + 1e-9) + pad
+        r = _far_radius(W, far_u)
+        r2 = min(r2, r * r)
+    pt = vec[_PT]
+    for k in range(D):
+        pt[k] = q[b, i, k]
+    nh = _candidates(q, b, pt, r2, i, use_grid, g, hits)
+    K, hmin, ctr, nv = 0, np.inf, vec[_CTR], vec[_NV]
+    for t in range(nh):
+        j = hits[t]
+        if paired[j]:
+            continue
+        K, hmin, ok = _constrain_one(
+            b, i, j, -1, q, p, ctr, paired, coop, Ds, 0.0, r2, lam, T, c, tau, U, G, rhs, nv,
+            K, hmin, far_u, far_p, prune, Rs2,
+        )  # fmt: skip
+        if not ok:
+            return 0, np.nan, False
+    m0, m1 = (0, agents.shape[0]) if paired[i] else (cstart[i], cstart[i + 1])
+    for t in range(m0, m1):
+        j = agents[t] if paired[i] else clist[t]
+        if j == i:
+            continue
+        K, hmin, ok = _constrain_one(
+            b, i, j, mate[i], q, p, ctr, paired, coop, Ds, 0.0, R2p, lam, T, c, tau, U, G, rhs,
+            nv, K, hmin, far_u, far_p, prune, Rs2,
+        )  # fmt: skip
+        if not ok:
+            return 0, np.nan, False
+    return K, hmin, True
+
+
+@jit_inline
+def _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver):
+    """x for UAV i (x_nom = a_nom - c_i) into vec[_XOUT]; returns (violated, status)."""
+    W, idx, Gw, bw, ws, marg = solver
+    D = a_nom.shape[2]
+    xin, xout, ctr = vec[_XIN], vec[_XOUT], vec[_CTR]
+    n2 = 0.0
+    for k in range(D):
+        xin[k] = a_nom[b, i, k] - ctr[k]
+        n2 += xin[k] * xin[k]
+    if not ok:  # a non-finite state (a diverged swarm): pass the command through
+        _put(xout, xin, D)
+        return True, STATUS_INFEASIBLE
+    if K == 0 and n2 <= U * U:  # nothing binds: the nominal (what the solver returns too)
+        _put(xout, xin, D)
+        return False, 0
+    violated = _margin(G, rhs, K, D, xin) < 0.0
+    cand, best = vec[_CAND], vec[_BEST]
+    status, _ = _solve_ws(xin, G, rhs, K, U, D, W, idx, cand, best, xout, Gw, bw, ws, marg, WS_MAX)
+    return violated, status
+
+
+@jit_kernel
+def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, g, outs, work, solver):
+    """Every UAV of swarm b (see :func:`swarm_kernel` for the arguments)."""
+    paired, mate, agents, coop, slot = ints
+    alpha, bound, abound = reals
+    a_out, u_out, active, corr, infeas, hmin = outs
+    hits, cstart, cnt, clist, G, rhs, vec = work
+    D = q.shape[2]
+    grid = use_grid and _grid_usable(q, p, b, g)
+    a_u, U_u, a_p = _class_values(paired, alpha, bound)
+    Au, Ap = _abounds(f, b, paired, bound, abound)
+    spd = _speeds(p, b, paired, vec[_CBAR])
+    far_uu = _far_of(pr, a_u, a_u, U_u, 0.0, Au, Au)
+    far_up = _far_of(pr, a_u, a_p, U_u, 0.0, Au, Ap)
+    _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, grid, g, hits, vec, far_up,
+              a_u, Au, spd, cstart, cnt, clist)  # fmt: skip
+    rows = (paired, mate, agents, coop, cstart, clist)
+    ctr = vec[_CTR]
+    for i in range(q.shape[1]):
+        U = bound[i]
+        far_u, far_p = far_uu, far_up
+        for k in range(D):
+            ctr[k] = f[b, i, k] if paired[i] else 0.0
+        if paired[i]:  # its own constants: its ball is around its flocking command
+            cn = abound[i] - bound[i]
+            far_u = _far_of(pr, alpha[i], a_u, U, cn, abound[i], Au)
+            far_p = _far_of(pr, alpha[i], a_p, U, cn, abound[i], Ap)
+        K, h, ok = _uav_rows(q, p, b, i, rows, pr, far_u, far_p, U, grid, g, hits, vec, spd, G, rhs)
+        violated, status = _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver)
+        hmin[b, i] = h
+        x, xin = vec[_XOUT], vec[_XIN]
+        dc = 0.0
+        for k in range(D):
+            a_out[b, i, k] = ctr[k] + x[k]
+            dc += (x[k] - xin[k]) ** 2
+            if slot[i] >= 0:
+                u_out[b, slot[i], k] = x[k]
+        corr[b, i] = np.sqrt(dc)
+        active[b, i] = violated or status == STATUS_INFEASIBLE
+        infeas[b, i] = status == STATUS_INFEASIBLE
+
+
+@jit_kernel
+def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, g, outs, work, solver):
+    """The swarm layer over every swarm: each UAV's filtered whole command.
+
+    Args:
+        q, p: (B, N, dim) positions and velocities; a_nom: (B, N, dim) nominal commands
+            (flocking + pair term); f: (B, N, dim) flocking commands.
+        ints: (paired (N,) bool, mate (N,) partner or -1, agents (M,), coop (N,) all True,
+            slot (N,) each UAV's agent column or -1).
+        reals: (alpha (N,) brake, bound (N,) U_i, abound (N,) scratch).
+        pr: :data:`SWARM` vector; use_grid, g: a grid of q (GridArrays) to search, or not.
+        outs: (a_out (B, N, dim), u_out (B, M, dim) the agents' x, active, correction,
+            infeasible, barrier (B, N)).
+        work: (hits (N + 1,), cstart (N + 1,), cnt (N,), clist (N M,), G (N, 3), rhs (N,),
+            vec (VEC_ROWS, 3)).  solver: (W (4, 4, 4), idx (5,), Gw, bw, ws, marg) of
+            :func:`~.kernels._solve_ws`.
+    """
+    for b in range(q.shape[0]):
+        _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, g, outs, work, solver)

@@ -1,0 +1,395 @@
+"""The swarm layer (``safety_scope="swarm"``, docs/swarm-safety.md): each UAV's problem
+against a reference solver, forward invariance with every UAV filtering, the grid against
+the scan of all N, the pair scope bit for bit as committed, the repulsion floor, the config
+and the infos in every view."""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from test_safety_filter import ref_margin, ref_qcqp
+from view_helpers import VIEWS, make_view, reset_view, step_view, zero_action
+
+from baselines.controllers import make_pair_policy
+from baselines.experiments.safety.nearest import LAYERS, nearest_figure, nearest_series
+from pairflock_env import PairFlockCore, make_config
+from pairflock_env.config.sections.flocking import repulsion_floor, repulsion_peak
+from pairflock_env.safety import SafetyParams, SwarmFilter
+from pairflock_env.safety.cbf.kernels import _sigma_min
+from pairflock_env.swarm.flocking import FLOCKING, flocking_params
+from pairflock_env.swarm.grid import NeighborGrid
+from pairflock_env.task.infos import SAFETY_SWARM_INFO_KEYS
+from pairflock_env.task.metrics import (
+    FLOCK_METRIC_DOCS,
+    SWARM_SAFETY_METRIC_DOCS,
+    flock_state,
+    swarm_safety_metrics,
+)
+
+SWARM = dict(safety_filter="cbf", safety_scope="swarm")
+
+
+def _filter(P, agents, N, partners=None, U=20.0, alpha=16.0, radius=8.4):
+    return SwarmFilter(
+        P, agents, N, partners, accel_limit=U, brake_accel=alpha, swarm_radius=radius
+    )
+
+
+def _random_state(rng, B, N, D, box, speed, spacing=1.2):
+    """Positions at least ``spacing`` apart in a box of side ``box``, velocities N(0, speed)."""
+    q = np.empty((B, N, D))
+    for b in range(B):
+        n = 0
+        while n < N:
+            x = rng.uniform(0, box, D)
+            if n == 0 or np.linalg.norm(q[b, :n] - x, axis=1).min() >= spacing:
+                q[b, n] = x
+                n += 1
+    return q, rng.normal(0.0, speed, (B, N, D))
+
+
+# ------------------------------------------------------------------- each UAV's problem
+def _reference_rows(P, filt, q, p, f, i, U_s, a_s, radius):
+    """UAV i's rows written here from the definition (every UAV in range, no skip)."""
+    N, D = q.shape[1:]
+    paired = np.isin(np.arange(N), filt.agents)
+    mate = dict(zip(filt.agents.tolist(), filt._ints[1][filt.agents].tolist(), strict=True))
+    alpha = np.where(paired, P.brake_accel, a_s)
+    ctr = f[0, i] if paired[i] else np.zeros(D)
+    G, b = [], []
+    for j in range(N):
+        d = np.linalg.norm(q[0, i] - q[0, j])
+        R = P.sensing_radius if paired[i] or paired[j] else radius
+        if j == i or not (d < R or mate.get(i) == j):
+            continue
+        n = (q[0, i] - q[0, j]) / d
+        a = alpha[i] + alpha[j]
+        _, smin = _sigma_min(d - P.barrier_distance, n @ (p[0, i] - p[0, j]), 0.0, a,
+                             P.dt, P.position_gain, P.decay, P.reaction_time)  # fmt: skip
+        G.append(n)
+        b.append(alpha[i] / a * smin - n @ ctr)
+    U = P.accel_limit if paired[i] else U_s
+    return np.array(G).reshape(-1, D), np.array(b), U, ctr
+
+
+def test_each_uavs_problem_matches_a_reference_solver():
+    """Random crowds (one pair among unpaired UAVs, some closing fast): every UAV's command
+    is the reference solver's optimum of its problem to 1e-6, or, where no command meets
+    every row, it attains the largest smallest margin."""
+    rng = np.random.default_rng(29)
+    P = SafetyParams(accel_limit=60.0, sensing_radius=30.0)
+    U_s, a_s, radius = 20.0, 16.0, 6.0
+    solved = infeasible = 0
+    for _ in range(40):
+        D = int(rng.integers(2, 4))
+        N = int(rng.integers(4, 11))
+        filt = _filter(P, [0, 1], N, [1, 0], U_s, a_s, radius)
+        q, p = _random_state(rng, 1, N, D, box=5.0, speed=float(rng.choice([1.0, 4.0])))
+        f = rng.normal(0, 10.0, (1, N, D))
+        a_nom = f + rng.normal(0, 30.0, (1, N, D))
+        out = filt.apply(q, p, a_nom, f)
+        for i in range(N):
+            G, b, U, ctr = _reference_rows(P, filt, q, p, f, i, U_s, a_s, radius)
+            x = out.a[0, i] - ctr
+            if out.infeasible[0, i]:
+                t = (G @ x - b).min()
+                assert abs(t - ref_margin(G, b, U)) <= 1e-6 * (1 + abs(t)), (t, G, b)
+                infeasible += 1
+                continue
+            ref = ref_qcqp(a_nom[0, i] - ctr, G, b, U) if len(b) else None
+            if ref is None:  # no row: the nominal, within the ball
+                xn = a_nom[0, i] - ctr
+                ref = xn * min(1.0, U / np.linalg.norm(xn))
+            assert np.linalg.norm(x - ref) <= 1e-6 * (1 + np.linalg.norm(ref)), (x, ref)
+            solved += 1
+    assert solved > 150 and infeasible > 0
+
+
+def test_every_command_stays_in_its_ball():
+    rng = np.random.default_rng(3)
+    P = SafetyParams(accel_limit=50.0)
+    filt = _filter(P, [0, 1, 2, 3], 30, [1, 0, 3, 2])
+    q, p = _random_state(rng, 4, 30, 2, box=8.0, speed=5.0)
+    f = rng.normal(0, 30.0, q.shape)
+    out = filt.apply(q, p, f + rng.normal(0, 100.0, q.shape), f)
+    norms = np.linalg.norm(out.a - np.where(filt._ints[0][:, None], f, 0.0), axis=-1)
+    bound = np.where(filt._ints[0], 50.0, 20.0)
+    assert (norms <= bound * (1 + 1e-12)).all()
+    assert np.allclose(out.u, out.a[:, :4] - f[:, :4], rtol=0, atol=1e-12)
+    assert out.active.any()
+
+
+# ------------------------------------------------------------------- forward invariance
+def _fly(seed, D, steps=300, B=24, N=14, sigma=8.0):
+    """Every UAV filters a fresh random nominal command each step (the pair members' much
+    larger), semi-implicit Euler with the filtered commands held. Every UAV senses every
+    other (assumption b). Returns, per swarm, whether it started safe, the closest two UAVs
+    up to the first step on which some UAV was infeasible, and that step."""
+    rng = np.random.default_rng(seed)
+    P = SafetyParams(accel_limit=100.0, sensing_radius=1e4)
+    filt = _filter(P, [0, 1], N, [1, 0], radius=1e4)
+    q, p = _random_state(rng, B, N, D, box=10.0, speed=2.0)
+    out = filt.allocate(B, D)
+    closest = np.full(B, np.inf)
+    stop = np.full(B, steps)
+    safe0 = None
+    iu = np.triu_indices(N, 1)
+    for k in range(steps):
+        d = np.linalg.norm(q[:, :, None] - q[:, None], axis=-1)[:, iu[0], iu[1]].min(1)
+        closest = np.where(stop > k, np.minimum(closest, d), closest)
+        a_nom = rng.normal(0, sigma, (B, N, D))
+        a_nom[:, :2] *= 20.0
+        f = rng.normal(0, 5.0, (B, N, D))
+        filt.apply(q, p, a_nom, f, out)
+        if safe0 is None:
+            safe0 = out.barrier.min(1) >= 0
+        stop = np.where(out.infeasible.any(1) & (stop == steps), k, stop)
+        p += out.a * P.dt
+        q += p * P.dt
+    return safe0, closest, stop
+
+
+@pytest.mark.parametrize("D", [2, 3])
+def test_forward_invariance_with_every_uav_filtering(D):
+    """No two UAVs of a swarm that starts safe ever come closer than safety_distance while
+    every UAV stays feasible (the state after a step on which all were feasible is safe)."""
+    safe0, closest, stop = _fly(11 + D, D)
+    assert safe0.sum() >= 20
+    assert (closest[safe0] >= 1.0 - 1e-9).all(), closest[safe0].min()
+    assert (stop[safe0] == 300).sum() >= 5  # not vacuous: whole runs without infeasibility
+
+
+# ------------------------------------------------------------------- grid and all pairs
+@pytest.mark.parametrize("D", [2, 3])
+def test_the_grid_gives_the_scan_bit_for_bit(D):
+    rng = np.random.default_rng(5 + D)
+    P = SafetyParams(accel_limit=80.0)
+    N = 120
+    filt = _filter(P, [0, 1, 5, 9], N, [1, 0, 9, 5])
+    q, p = _random_state(rng, 3, N, D, box=25.0, speed=3.0)
+    p[:, :2] *= 10.0  # a fast pair
+    f = rng.normal(0, 10.0, q.shape)
+    a_nom = f + rng.normal(0, 20.0, q.shape)
+    scan = filt.apply(q, p, a_nom, f)
+    for cell in (1.5, 4.0, 30.0):
+        grid = NeighborGrid(3, N, D, cell_size=cell).build(q)
+        on = filt.apply(q, p, a_nom, f, grid=grid)
+        for x, y in zip(scan.arrays(), on.arrays(), strict=True):
+            assert np.array_equal(x, y)
+    assert scan.active.any()
+
+
+def test_core_on_the_grid_flies_the_all_pairs_trajectories():
+    kw = dict(n_uavs=60, init="random", pairs=((0, 1), (2, 3)), **SWARM)
+    runs = []
+    for search in ("all_pairs", "grid"):
+        core = PairFlockCore(make_config("paper", neighbor_search=search, **kw), num_swarms=2)
+        core.reset(seed=[4, 5])
+        rng = np.random.default_rng(0)
+        for _ in range(150):
+            core.step(rng.uniform(-1, 1, (2, 4, 2)))
+        runs.append((core.q.copy(), core.p.copy()))
+    assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][1], runs[1][1])
+
+
+# ------------------------------------------------------------------- off: as committed
+#: sha256 of 300 steps of random pair actions (seed 7) of two swarms (seeds 3, 4): the applied
+#: pair commands, the corrections, then the final state; taken from the commit before the
+#: swarm layer (7f7c231)
+COMMITTED = {
+    "paper_n20_corners_cbf": (
+        dict(preset="paper", n_uavs=20, safety_filter="cbf"),
+        "33b29134bec4ef25f3b69e096574aaa2d61ec733feac4d8e8a89f982f40e126d",
+    ),
+    "paper_n50_random_cbf": (
+        dict(preset="paper", n_uavs=50, init="random", safety_filter="cbf"),
+        "a0c9488930f11844fed82350034336dedd7a09d87f4a6964166cad7f33aac924",
+    ),
+    "paper_n100_random_off": (
+        dict(preset="paper", n_uavs=100, init="random"),
+        "fad9a576a9bab1fa877d391ed13e9e3b15b0397219ea90569c5ca2fc66882c90",
+    ),
+    "quadrotor_cbf": (
+        dict(preset="paper-quadrotor", safety_filter="cbf"),
+        "4f3f740d395c1757cbeeb21b88d65e8564bf0df14288ed3434a0f947396d6817",
+    ),
+}
+
+
+def _digest(steps=300, seeds=(3, 4), preset="paper", **kw):
+    core = PairFlockCore(None, num_swarms=len(seeds), preset=preset, **kw)
+    res = core.reset(seed=list(seeds))
+    rng = np.random.default_rng(7)
+    h = hashlib.sha256()
+    for _ in range(steps):
+        res = core.step(rng.uniform(-1.0, 1.0, (core.num_swarms, core.n_agents, core.config.dim)))
+        h.update(core.pair_command.tobytes())
+        h.update(res.info["safety_correction"].tobytes())
+    h.update(core.q.tobytes())
+    h.update(core.p.tobytes())
+    return h.hexdigest()
+
+
+@pytest.mark.parametrize("name", COMMITTED)
+def test_the_pairs_scope_flies_as_committed(name):
+    """With safety_scope="pairs" (the default, with or without the swarm fields set) the
+    filter and the flocking law are bit for bit those before the swarm layer."""
+    kw, digest = COMMITTED[name]
+    assert _digest(**kw) == digest
+    if name == "paper_n20_corners_cbf":
+        extra = dict(safety_scope="pairs", swarm_accel_limit=5.0, swarm_repulsion_floor=True)
+        assert _digest(**kw, **extra) == digest
+
+
+# ------------------------------------------------------------------- the repulsion floor
+def test_the_floor_is_where_the_repulsion_peaks_and_grows_below():
+    cfg = make_config("paper", **SWARM)
+    rho = repulsion_peak(cfg)
+    s2, a, br = cfg.repulsion_sigma2, cfg.attraction, cfg.repulsion
+
+    def F(r):
+        return r * (br * np.exp(-r * r / s2) - a)
+
+    assert abs(rho - 3.0025) < 1e-4 and F(rho) > max(F(rho * 0.999), F(rho * 1.001))
+    r2, K = repulsion_floor(cfg)
+    assert r2 == rho * rho and pytest.approx(F(rho) * rho, rel=1e-15) == K
+    prm = FLOCKING.unpack(flocking_params(cfg))
+    assert (prm["floor_radius2"], prm["floor_gain"]) == (r2, K)
+    for off in (make_config("paper"), cfg.replace(swarm_repulsion_floor=False)):
+        assert repulsion_floor(off) == (0.0, 0.0)
+    # two UAVs 1 m apart: the paper's repulsion is weaker than at rho*; the floor's is stronger
+    q = np.array([[[0.0, 0.0], [1.0, 0.0]]])
+    for c, force in ((make_config("paper", n_uavs=2), F(1.0)), (cfg.replace(n_uavs=2), K)):
+        core = PairFlockCore(c, num_swarms=1)
+        core.reset(seed=0, options=dict(positions=q[0], velocities=np.zeros((2, 2))))
+        lq, lp = core.leader_state()
+        pin = c.pin_position_gain * (lq[0] - q[0, 0]) + c.pin_velocity_gain * lp[0]
+        assert core.flock_accel[0, 0] - pin == pytest.approx([-force, 0.0], rel=1e-12)
+
+
+# ------------------------------------------------------------------- config and the env
+def test_the_swarm_scope_needs_the_cbf_filter_and_follows_the_vehicle():
+    with pytest.raises(ValueError, match=r"safety_scope='swarm'.*needs safety_filter in \['cbf'\]"):
+        make_config("paper", safety_scope="swarm")
+    with pytest.raises(ValueError, match="swarm_brake_accel"):
+        make_config("paper", swarm_brake_accel=30.0, **SWARM)
+    with pytest.raises(ValueError, match="safety_scope"):
+        make_config("paper", safety_scope="all")
+    particle = PairFlockCore(make_config("paper", **SWARM)).safety.filter
+    quad = PairFlockCore(make_config("paper-quadrotor", **SWARM)).safety.filter
+    for filt, U, alpha in ((particle, 20.0, 16.0), (quad, 6.0, 4.8)):
+        paired = filt._ints[0]
+        assert (filt._reals[1][~paired] == U).all()
+        assert np.allclose(filt._reals[0][~paired], alpha)
+
+
+def test_sliding_mode_with_the_swarm_layer_keeps_every_two_uavs_apart():
+    cfg = make_config("paper", n_uavs=20, horizon=8.0, **SWARM)
+    core = PairFlockCore(cfg, num_swarms=2)
+    res = core.reset(seed=[71000, 71001])
+    pol = make_pair_policy("smc", cfg)
+    closest, active, infeasible = np.inf, 0, 0
+    for _ in range(cfg.episode_steps):
+        act, _ = pol.predict(res.obs.reshape(-1, res.obs.shape[-1]), deterministic=True)
+        res = core.step(np.asarray(act, float).reshape(2, core.n_agents, 2))
+        closest = min(closest, res.info["swarm_min_separation"].min())
+        active += res.info["swarm_filter_active"].sum()
+        infeasible += res.info["swarm_filter_infeasible"].sum()
+        # the agents' rows of the layer are their per-agent infos
+        o = core.safety.output
+        assert np.array_equal(res.info["safety_active"], o.active[:, core.agent_uavs])
+    assert closest >= 1.0 and active > 0 and infeasible == 0
+
+
+@pytest.mark.parametrize("kind", VIEWS)
+@pytest.mark.parametrize("scope", ["off", "pairs", "swarm"])
+def test_swarm_infos_in_every_view(kind, scope):
+    kw = {} if scope == "off" else dict(safety_filter="cbf", safety_scope=scope)
+    if kind == "sb3":
+        kw["info_keys"] = "all"
+    env = make_view(kind, **kw)
+    reset_view(env, kind, seed=0)
+    for _ in range(3):
+        out = step_view(env, kind, zero_action(env, kind))
+    info = out[-1][env.agents[0]] if kind == "parallel" else out[-1]
+    info = info[0] if kind == "sb3" else info
+    for k in ("swarm_min_separation", *SAFETY_SWARM_INFO_KEYS):
+        v = np.asarray(info[k])
+        assert v.dtype.kind in "iuf" and np.isfinite(v).all() and (v >= 0).all(), (k, v)
+    assert (np.asarray(info["swarm_min_separation"]) > 1.0).all()
+    env.close()
+
+
+def test_swarm_min_separation_is_the_closest_two_uavs_partners_included():
+    q = np.array([[0.0, 0.0], [0.5, 0.0], [5.0, 0.0], [5.0, 3.0]])  # UAVs 0, 1: the pair
+    for cfg in (make_config("paper", n_uavs=4), make_config("paper", n_uavs=4, **SWARM)):
+        core = PairFlockCore(cfg, num_swarms=1)
+        res = core.reset(seed=0, options=dict(positions=q, velocities=np.zeros((4, 2))))
+        assert res.info["swarm_min_separation"][0] == 0.5
+        assert res.info["min_separation"][0].min() == 4.5  # the partner left out there
+
+
+# ------------------------------------------------------------------- metrics and commands
+def test_flock_state_on_the_grid_and_by_all_pairs():
+    rng = np.random.default_rng(2)
+    q = rng.uniform(0, 60, (2, 300, 2))
+    unpaired = np.ones(300, bool)
+    unpaired[:4] = False
+    grid = NeighborGrid(2, 300, 2, cell_size=8.4).build(q)
+    lq = np.array([30.0, 20.0])
+    for b in range(2):
+        rg, track, dev = flock_state(q, b, lq, unpaired, 8.4, 7.0)
+        assert flock_state(q, b, lq, unpaired, 8.4, 7.0, grid) == pytest.approx((rg, track, dev))
+        x = q[b, unpaired]
+        assert rg == pytest.approx(np.sqrt(((x - x.mean(0)) ** 2).sum(1).mean()))
+        assert track == pytest.approx(np.linalg.norm(x.mean(0) - lq))
+        d = np.linalg.norm(q[b, :, None] - q[b, None], axis=-1)[np.triu_indices(300, 1)]
+        d = d[d < 8.4]
+        assert dev == pytest.approx(((d - 7.0) ** 2).sum() / (d.size + 1))
+
+
+def test_swarm_safety_metrics_count_steps_and_uav_steps():
+    m = swarm_safety_metrics(np.array([3.0, 0.9, 1.2, 0.95]), [0, 4, 2], [0, 2, 0], 1.0)
+    assert m == {
+        "swarm_closest": 0.9,
+        "swarm_steps_below": 2,
+        "swarm_active_uav_steps": 6,
+        "swarm_infeasible_uav_steps": 2,
+        "swarm_infeasible_steps": 1,
+    }
+
+
+def test_the_swarm_safety_suite_reports_every_uav_and_the_flock(tmp_path):
+    out = tmp_path / "ss"
+    cmd = [sys.executable, "-m", "baselines.benchmark", "--suite", "swarm-safety", "--seeds", "1"]
+    cmd += ["--n-uavs", "20", "--set", "init=corners", "-p", "smc", "--horizon", "12"]
+    cmd += ["--workers", "2", "--no-figures", "--quiet", "--out", str(out)]
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert [r["scenario"] for r in rows] == ["off", "pairs", "swarm"]
+    assert all(r["seed"] == "71000" for r in rows)  # the held-out seeds
+    for r in rows:
+        assert set(SWARM_SAFETY_METRIC_DOCS) | set(FLOCK_METRIC_DOCS) <= set(r)
+    assert float(rows[2]["swarm_closest"]) >= 1.0 and rows[2]["swarm_steps_below"] == "0"
+    assert "## Every UAV and the flock" in (out / "summary.md").read_text()
+    assert "closest two UAVs min (m)" in done.stdout
+    report = subprocess.run(
+        [sys.executable, "-m", "baselines.experiments.safety.swarm_report", str(out)],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    assert "| 20 | corners | smc | swarm | 1 |" in report and "swarm/pairs" in report
+
+
+def test_the_nearest_neighbour_figure(tmp_path):
+    series = [nearest_series(30, layer, 71000, every=1.0, horizon=5.0) for layer in LAYERS]
+    assert [len(s["t"]) for s in series] == [6, 6]
+    assert all(s["min"][k] <= s["p1"][k] <= s["p50"][k] for s in series for k in range(6))
+    assert nearest_figure(series, tmp_path / "nn.png").stat().st_size > 0
