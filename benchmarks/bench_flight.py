@@ -2,6 +2,7 @@
 
     python benchmarks/bench_flight.py                  # every section (minutes)
     python benchmarks/bench_flight.py --quick          # small and short (seconds)
+    python benchmarks/bench_flight.py --smoke          # every part once, tiny
     python benchmarks/bench_flight.py --sections large # 50 s of 10,000 UAVs
     python benchmarks/bench_flight.py --sections order # lattice vs shuffled indices
 
@@ -123,6 +124,7 @@ def main(argv=None) -> int:
         prog="python benchmarks/bench_flight.py", description=__doc__.split("\n\n")[0]
     )
     ap.add_argument("--quick", action="store_true", help="small swarms, short flights (seconds)")
+    ap.add_argument("--smoke", action="store_true", help="every part once, tiny (the suite)")
     ap.add_argument("--sections", nargs="+", choices=SECTIONS, default=list(SECTIONS))
     ap.add_argument("--n-uavs", type=int, default=10_000, help="UAVs of the large flight")
     ap.add_argument("--seconds", type=float, default=50.0, help="flight time of an episode, s")
@@ -135,6 +137,8 @@ def main(argv=None) -> int:
     order_steps, repeats = args.order_steps, args.repeats
     if args.quick:
         big, seconds, small_b, order_steps, repeats = 1_000, 0.2, 4, 5, 1
+    if args.smoke:
+        big, seconds, small_b, order_steps, repeats = 300, 0.05, 2, 2, 1
     clock = "CPU" if args.cpu_time else "wall"
     print(
         f"# Whole flights ({platform.machine()}, 1 thread, {clock} time; UAV-steps/s, "

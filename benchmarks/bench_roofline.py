@@ -2,6 +2,7 @@
 
     python benchmarks/bench_roofline.py            # a few seconds of each measurement
     python benchmarks/bench_roofline.py --quick    # smaller and shorter
+    python benchmarks/bench_roofline.py --smoke    # every part once, tiny
 
 Prints the floating-point operations and the memory traffic of one UAV-step, counted from the
 step's equations on the state it is timed on (the mean number of neighbours measured there),
@@ -104,10 +105,13 @@ def main(argv=None) -> int:
         prog="python benchmarks/bench_roofline.py", description=__doc__.split("\n\n")[0]
     )
     ap.add_argument("--quick", action="store_true", help="smaller and shorter (seconds)")
+    ap.add_argument("--smoke", action="store_true", help="every part once, tiny (the suite)")
     args = ap.parse_args(argv)
     N, B, steps, repeats, gemm, mb = 100, 256, 20, 5, 2000, 400
-    if args.quick:
+    if args.quick or args.smoke:
         B, steps, repeats, gemm, mb = 16, 5, 1, 400, 32
+    if args.smoke:
+        B, steps, gemm, mb = 2, 2, 100, 8
     rate, neighbors = core_rate(N, B, steps, repeats)
     flops = flops_per_uav_step(N, neighbors)
     fpeak, bpeak = peak_flops(gemm, 3), peak_bandwidth(mb, 3)

@@ -19,7 +19,7 @@ def _find(parent, x):
 
 @njit(cache=False)
 def _reference(q, p, ql, pl, h, partner, prm, acc, min_d2, ncol, lcc, bad, vmis, vmax):
-    a, r, inv_s2, r2, c, c1, c2, coll2, limit = prm
+    a, r, inv_s2, r2, c, c1, c2, coll2, limit, floor2, floor_gain = prm
     B, N, D = q.shape
     parent = np.empty(N, np.int64)
     size = np.empty(N, np.int64)
@@ -62,6 +62,8 @@ def _reference(q, p, ql, pl, h, partner, prm, acc, min_d2, ncol, lcc, bad, vmis,
                 nc += d2 < coll2
                 if d2 < r2:
                     w = a - r * np.exp(-d2 * inv_s2)
+                    if d2 < floor2 and d2 > 0.0:  # the swarm layer's repulsion floor
+                        w = min(w, -floor_gain / d2)
                     for k in range(D):
                         f = w * (q[b, j, k] - q[b, i, k]) + c * (p[b, j, k] - p[b, i, k])
                         acc[b, i, k] += f

@@ -38,10 +38,14 @@ def same(a: np.ndarray, b: np.ndarray) -> bool:
 
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("kind", ["sparse", "packed", "ties", "lattice", "nonfinite"])
-def test_flocking_pass_equals_the_symmetric_sweep(kind, dim):
+@pytest.mark.parametrize("floor", [False, True])
+def test_flocking_pass_equals_the_symmetric_sweep(kind, dim, floor):
     rng = np.random.default_rng(7 + dim)
-    for N, B in ((150, 3), (9, 2), (2, 1)):
-        cfg = make_config("paper", n_uavs=N, dim=dim, pairs=((0, 1),), collision_distance=2.0)
+    layer = dict(safety_filter="cbf", safety_scope="swarm") if floor else {}
+    for N, B in ((150, 3), (9, 2), (2, 1), (700, 1)):
+        cfg = make_config(
+            "paper", n_uavs=N, dim=dim, pairs=((0, 1),), collision_distance=2.0, **layer
+        )
         prm = flocking_params(cfg)
         q, p = _state(kind, rng, B, N, dim), rng.normal(0.0, 2.0, (B, N, dim))
         lq, lp = rng.normal(size=(B, dim)), rng.normal(size=(B, dim))

@@ -230,14 +230,16 @@ class PairInterface(LearningInterface):
         rows = _rows(self._check_obs_shape(obs)) if approach else np.zeros((1, self.layout.size))
         log_err = np.log1p(err / p.error_scale)  # numpy's logarithm (pair_kernels' docstring)
         diverged = np.asarray(info["diverged"], dtype=bool)
-        diverged = np.broadcast_to(
-            diverged.reshape(diverged.shape + (1,) * (err.ndim - diverged.ndim)), lead
-        )
+        if diverged.shape != lead:  # per swarm: every agent of a diverged swarm
+            diverged = diverged.reshape(diverged.shape + (1,) * (err.ndim - diverged.ndim))
+            diverged = np.broadcast_to(diverged, lead)
+        if sep.shape != lead:
+            sep = np.broadcast_to(sep, lead)
         a = np.asarray(action, dtype=np.float64).reshape(-1, cfg.dim)
         out = np.empty(err.size)
         flags = np.array([approach, cfg.n_uavs > 2], np.bool_)
         reward_rows(
-            log_err.reshape(-1), err.reshape(-1), np.broadcast_to(sep, lead).reshape(-1), a,
+            log_err.reshape(-1), err.reshape(-1), sep.reshape(-1), a,
             diverged.reshape(-1), rows, self._rew_at, self._rew_prm, flags, self._dims, out,
         )  # fmt: skip
         return out.reshape(lead)

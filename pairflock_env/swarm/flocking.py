@@ -368,9 +368,9 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
         bit_x = one << np.uint64(x & 63)
         for w in range(lo >> 6, (N + 63) >> 6 if near else 0):  # neighbours after x, in order
             bits = np.uint64(0)
-            rw, first, end = row[64 * w : 64 * w + 64], lo - 64 * w, N - 64 * w
-            for t in range(64):
-                hit = (rw[t] < prm.radius2) & (t >= first) & (t < end)
+            rw, first = row[64 * w : min(64 * w + 64, N)], lo - 64 * w
+            for t in range(rw.shape[0]):
+                hit = (rw[t] < prm.radius2) & (t >= first)
                 bits |= np.uint64(hit) << np.uint64(t)
             while bits != 0:
                 j = 64 * w + low_bit(bits)

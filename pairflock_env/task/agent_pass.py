@@ -18,6 +18,7 @@ import numpy as np
 from pairflock_env.kernels import jit_inline, jit_kernel
 from pairflock_env.task.pairing import dot_axes, pair_quantities
 from pairflock_env.task.rewards import REWARD_TERMS, agent_reward, reward_params
+from pairflock_env.task.spaces import separation_bound
 
 __all__ = ["AGENT_ROWS", "OBS_FIELDS", "AgentPass"]
 
@@ -66,7 +67,7 @@ def _agents_kernel(
     three = len(dims) == 3
     q, p, acc, min_d2, ql, pl = state
     shared, nbr_pos, nbr_vel, nbr_mask = neighbors
-    obs, res, finite = out
+    obs, res, finite, closest = out
     c, rprm = prm[0], prm[1:]
     K = nbr_mask.shape[2]
     D = 3 if three else 2
@@ -110,6 +111,20 @@ def _agents_kernel(
             for k in range(obs.shape[2]):
                 ok &= np.isfinite(obs[b, m, k])
         finite[b] = ok
+        # the closest two UAVs: the separations leave each partner out, the pair distance adds
+        # it (np.min and np.minimum, NaN kept)
+        d = np.inf
+        for i in range(min_d2.shape[1]):
+            v = min_d2[b, i]
+            d = v if (v < d or v != v) else d
+        d = np.sqrt(d)
+        if agents.shape[0] > 0:
+            e = res[0, b, 0]
+            for m in range(1, agents.shape[0]):
+                v = res[0, b, m]
+                e = v if (v < e or v != v) else e
+            d = d if (d < e or d != d) else e
+        closest[b] = d
 
 
 class AgentPass:
@@ -127,8 +142,6 @@ class AgentPass:
         self.prm = np.concatenate([[cfg.surface_slope], reward_params(cfg)])
         self.fixed_sep = np.nan
         if cfg.n_uavs == 2:  # no non-partner UAV at all: the largest finite separation
-            from pairflock_env.task.spaces import separation_bound
-
             self.fixed_sep = separation_bound(cfg)
         self.at = np.array(
             [layout.slice(f).start if f in layout else -1 for f in OBS_FIELDS], np.int64
@@ -138,14 +151,16 @@ class AgentPass:
 
     def run(self, q, p, acc, min_d2, leader_q, leader_p, u, pair_out):
         """Observation (B, M, obs_size) float32, the results ``AGENT_ROWS`` (len, B, M)
-        float64 (new arrays) and whether each swarm's observation is finite (B,)."""
+        float64, whether each swarm's observation is finite (B,) and the distance of its
+        closest two UAVs, partners included (B,) (new arrays)."""
         B, M = q.shape[0], self.agents.shape[0]
         obs = np.empty((B, M, self.size), np.float32)
         res = np.empty((len(AGENT_ROWS), B, M))
         finite = np.empty(B, np.bool_)
+        closest = np.empty(B)
         pp = pair_out
         state = (q, p, acc, min_d2, leader_q, leader_p)
         neighbors = (pp["shared"], pp["nbr_pos"], pp["nbr_vel"], pp["nbr_mask"])
         args = (self.agents, self.partners, self.pairs, self.d_m, u, self.prm, self.fixed_sep)
-        _agents_kernel(state, neighbors, *args, self.at, self.dims, (obs, res, finite))
-        return obs, res, finite
+        _agents_kernel(state, neighbors, *args, self.at, self.dims, (obs, res, finite, closest))
+        return obs, res, finite, closest
