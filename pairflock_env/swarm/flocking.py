@@ -211,7 +211,19 @@ def _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size):
 
 
 @jit_inline
-def _pair_force(prm, d2, dq0, dq1, dq2, dp0, dp1, dp2):
+def _three(dims):
+    """Whether ``dims`` (see :data:`_DIMS`) is a 3-D kernel's."""
+    return len(dims) % 2 == 1
+
+
+@jit_inline
+def _floor(dims):
+    """Whether ``dims`` (see :data:`_DIMS`) is a kernel's with the repulsion floor."""
+    return len(dims) > 3
+
+
+@jit_inline
+def _pair_force(prm, d2, dq0, dq1, dq2, dp0, dp1, dp2, floor):
     """Eqs. 13-18: the force f_ij of neighbour j on UAV i at squared distance d2, from the
     offset dq = q_j - q_i and the relative velocity dp = p_j - p_i (three components; the
     third is zero and unused in 2-D), and its weight w = a - g_r(||q_j - q_i||). Odd in
@@ -219,7 +231,7 @@ def _pair_force(prm, d2, dq0, dq1, dq2, dp0, dp1, dp2):
     the repulsion closer than rho* is at least F* rho* / rho (w multiplies q_j - q_i, of
     length rho)."""
     w = prm.attraction - prm.repulsion * np.exp(-d2 * prm.inv_sigma2)
-    if d2 < prm.floor_radius2 and d2 > 0.0:
+    if floor and d2 < prm.floor_radius2 and d2 > 0.0:
         w = min(w, -prm.floor_gain / d2)
     return _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2), w
 
@@ -232,7 +244,7 @@ def _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2):
 
 
 @jit_inline
-def _gather_uav(s, x, n, prm, fw, fwu, iw, three):
+def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor):
     """UAV x (in slot s) against the candidate list (indices in increasing order, every
     UAV within reach of x among them, x too): x's separation and flocking command, and
     its edges of the interaction graph; returns the collisions seen from x.
@@ -274,7 +286,8 @@ def _gather_uav(s, x, n, prm, fw, fwu, iw, three):
         dq2 = fw[CQ + 2, c] - x2 if three else 0.0
         dp2 = fw[CP + 2, c] - v2 if three else 0.0
         dq0, dq1 = fw[CQ, c] - x0, fw[CQ + 1, c] - x1
-        g = _pair_force(prm, row[c], dq0, dq1, dq2, fw[CP, c] - v0, fw[CP + 1, c] - v1, dp2)[0]
+        dp0, dp1 = fw[CP, c] - v0, fw[CP + 1, c] - v1
+        g = _pair_force(prm, row[c], dq0, dq1, dq2, dp0, dp1, dp2, floor)[0]
         f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
     fw[ACC, s], fw[ACC + 1, s], fw[ACC + 2, s] = f0, f1, f2
     parent, size = iw[PARENT], iw[SIZE]
@@ -292,7 +305,7 @@ def _gather_uav(s, x, n, prm, fw, fwu, iw, three):
 @jit_kernel
 def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
     """Every UAV of swarm b against every other; returns the number of collisions."""
-    three = len(dims) == 3
+    three, floor = _three(dims), _floor(dims)
     N = q.shape[1]
     for i in range(N):  # slots, and the candidate list, in index order
         iw[ORDER, i] = iw[CIDX, i] = iw[CSLOT, i] = i
@@ -300,7 +313,7 @@ def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
     gather(N, fw, iw, three)
     nc = 0
     for x in range(N):
-        nc += _gather_uav(x, x, N, prm, fw, fwu, iw, three)
+        nc += _gather_uav(x, x, N, prm, fw, fwu, iw, three, floor)
     put_slots(b, iw[ORDER], acc, min_d2, fw, three)
     return nc // 2  # each pair was seen from both sides
 
@@ -312,7 +325,7 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
     after it kept in ``wm[x, j]`` and x marked in that neighbour's bits ``lb[j]``, so that
     x finds its neighbours before it, in order, with their weights. The same sums in the
     same order; half the distances and exponentials. Needs ``wm`` of N x N."""
-    three = len(dims) == 3
+    three, floor = _three(dims), _floor(dims)
     N = q.shape[1]
     for i in range(N):  # positions and velocities by axis, in index order
         for k in range(3 if three else 2):
@@ -378,7 +391,7 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
                 dq2 = cq2[j] - x2 if three else 0.0
                 dp2 = cp2[j] - v2 if three else 0.0
                 g, wm[x, j] = _pair_force(
-                    prm, row[j], cq0[j] - x0, cq1[j] - x1, dq2, cp0[j] - v0, cp1[j] - v1, dp2
+                    prm, row[j], cq0[j] - x0, cq1[j] - x1, dq2, cp0[j] - v0, cp1[j] - v1, dp2, floor
                 )
                 lb[j, x >> 6] |= bit_x
                 f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
@@ -395,7 +408,7 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
     candidate list (its one-ring, put in index order once), and UAVs, candidates and the
     union-find forest are all held in slot (cell) order, so that memory follows space
     whatever the indices. The same results."""
-    three = len(dims) == 3
+    three, floor = _three(dims), _floor(dims)
     N = q.shape[1]
     order = g.order[b]
     copy_slots(q, p, b, order, partner, acc, fw, iw, three)
@@ -425,7 +438,7 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
         sort_indices(cidx, cslot, n, iw[TMP], iw[TMP2], iw[HIST], N)
         gather(n, fw, iw, three)
         for s2 in range(s, end):
-            nc += _gather_uav(s2, order[s2], n, prm, fw, fwu, iw, three)
+            nc += _gather_uav(s2, order[s2], n, prm, fw, fwu, iw, three, floor)
         s = end
     put_slots(b, order, acc, min_d2, fw, three)
     # the one-ring proves separations shorter than a cell; the others need a wider search
@@ -480,8 +493,10 @@ _FLOCK_KEYS += ("velocity_mismatch", "velocity_mismatch_max", "_fw", "_fwu", "_i
 #: all pairs meet each pair once (:func:`_sweep_pairs`) up to this many UAVs, whose N x N
 #: weights take 2 MB; beyond, each UAV meets the others in turn (:func:`_sweep_all_pairs`)
 _PAIRS_MAX = 512
-#: the ``dims`` argument of the kernels, by dimension
-_DIMS = {2: (0, 0), 3: (0, 0, 0)}
+#: the ``dims`` argument of the kernels: its length is the dimension (2 or 3), plus 2 with the
+#: swarm layer's repulsion floor, so that each combination compiles its own kernels (the
+#: floor's test leaves the pair loops of the paper's law)
+_DIMS = {(2, False): (0, 0), (3, False): (0, 0, 0), (2, True): (0,) * 4, (3, True): (0,) * 5}
 
 
 def flocking_pass(
@@ -552,7 +567,7 @@ def flocking_runner(
         n_wm = N if grid is None and N <= _PAIRS_MAX else 0  # (the grid's fallback: rows)
         out["_wm"] = np.zeros((n_wm, n_wm))
         out["_lb"] = np.zeros((n_wm, words), np.uint64)
-    tail = (params, _DIMS[D], *(out[k] for k in _FLOCK_KEYS))
+    tail = (params, _DIMS[D, bool(params[_F.floor_radius2] > 0)], *(out[k] for k in _FLOCK_KEYS))
     if grid is None:
         return BoundKernel(_flocking_kernel, tail, out)
     return BoundKernel(_flocking_grid_kernel, (*tail, *grid.arrays), out)
