@@ -163,7 +163,7 @@ def main() -> None:
     p.add_argument("--seconds", type=float, default=10.0, help="flight time of --share (s)")
     p.add_argument("--layers", nargs="+", default=["swarm"], choices=list(LAYERS))
     p.add_argument("--policy", default=None, help="share: smc; flight: zero")
-    p.add_argument("--seed", type=int, default=71000)
+    p.add_argument("--seed", type=int, default=72000)
     a = p.parse_args()
     if a.smoke:
         share(20, 2, 0.05, "smc")

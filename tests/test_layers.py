@@ -6,6 +6,7 @@ import only downwards::
     pairflock_env  <  baselines.runtime  <  baselines.controllers  <  baselines.evaluation
                    <  baselines.reporting  <  baselines.experiments (and the launchers
                       beside baselines/__init__.py)
+    baselines.evaluation  <  baselines.export (a policy for a flight controller)
                    <  train (runtime, controllers, evaluation and reporting; no experiment)
 
 ``baselines.runtime`` (files, run records, thread pinning, processes, the CLI error path) is
@@ -35,6 +36,8 @@ ALLOWED = {
     "evaluation": {"runtime", "controllers", "evaluation"},
     "reporting": {"runtime", "controllers", "evaluation", "reporting"},
     "experiments": {"runtime", "controllers", "evaluation", "reporting", "experiments"},
+    # a trained policy exported for a flight controller (its parity checks roll it out)
+    "export": {"runtime", "controllers", "evaluation", "export"},
     "train": {"runtime", "controllers", "evaluation", "reporting", "train"},
 }
 #: the documented commands ``python -m baselines.<name>``: launchers of the experiments

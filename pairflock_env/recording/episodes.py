@@ -181,6 +181,8 @@ class CoreRecorder:
         self._swarm_keys: list[str] | None = None
         self._pair_target = np.asarray(cfg.d_m_array, float)
         self._safety = cfg.safety_filter != "none"
+        # a vehicle fed setpoints (the Crazyflie) shows the rows it flew
+        self._setpoints = getattr(core.vehicle, "setpoint", None) is not None
         self._config = cfg.to_dict()
         self._episodes = np.zeros(B, np.int64)
         self._seed_given: list[Any] = [None] * B
@@ -323,6 +325,8 @@ class CoreRecorder:
             )
             if self._safety:
                 arrays.update(self._safety_per_uav(info, b))
+            if self._setpoints:
+                arrays["setpoint"] = core.vehicle.setpoint[b]
             writers[b].append(
                 steps[b],
                 force=ended[b],

@@ -181,11 +181,13 @@ class RecordingWriter:
         }
 
     # -- what a step holds -------------------------------------------------------------------
-    def _row_shape(self, scope: str, vector: bool) -> tuple[int, ...]:
+    def _row_shape(self, scope: str, vector: bool | int) -> tuple[int, ...]:
         if scope == "safety":
             scope = self.manifest["safety_scope"]
         lead = {"step": (), "uav": (self.num_uavs,), "agent": (self.num_pairs,)}[scope]
-        return (*lead, self.dim) if vector else lead
+        if vector is True:
+            return (*lead, self.dim)
+        return (*lead, int(vector)) if vector else lead
 
     def _dtype(self, kind: str) -> np.dtype:
         return np.dtype(self.manifest["float_dtype"] if kind == "float" else kind)

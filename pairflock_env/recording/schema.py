@@ -12,11 +12,12 @@ import numpy as np
 
 __all__ = ["STEP_ARRAYS", "check_config", "check_pairs", "check_path", "check_scalar", "json_safe"]
 
-#: the per-step arrays a recording may hold: name: (scope, a vector (dim,) per item, dtype,
-#: unit, description). Scope "step": one per step; "uav": (N,); "agent": (M,), one per pair;
-#: "safety": "agent" or "uav" by the writer's ``safety_scope``. dtype "float" is the writer's
+#: the per-step arrays a recording may hold: name: (scope, per item a vector of dim (True), of
+#: that many values (an int) or one value (False), dtype, unit, description). Scope "step": one
+#: per step; "uav": (N,); "agent": (M,), one per pair; "safety": "agent" or "uav" by the
+#: writer's ``safety_scope``. dtype "float" is the writer's
 #: ``float_dtype``. ``step``, ``time``, ``positions`` and ``velocities`` are always present.
-STEP_ARRAYS: dict[str, tuple[str, bool, str, str, str]] = {
+STEP_ARRAYS: dict[str, tuple[str, bool | int, str, str, str]] = {
     "step": ("step", False, "int64", "", "index of the env step (0: the reset)"),
     "time": ("step", False, "float64", "s", "simulated time"),
     "positions": ("uav", True, "float", "m", "position of each UAV"),
@@ -39,6 +40,14 @@ STEP_ARRAYS: dict[str, tuple[str, bool, str, str, str]] = {
         "float",
         "m",
         "distance from each UAV to its nearest neighbour, as the env measures separation",
+    ),
+    "setpoint": (
+        "uav",
+        10,
+        "float",
+        "",
+        "the setpoint row each UAV flew during the step that ended here, for a vehicle fed "
+        "setpoints (the Crazyflie's cmdFullState, CMD_FIELDS; 0 at a reset)",
     ),
 }
 

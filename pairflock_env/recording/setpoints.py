@@ -14,7 +14,7 @@ frame x forward, y left, z up): :data:`COLUMNS`. Two sources:
     Crazyflie model) each UAV flew during the step that ended at each recorded step (zeros at
     step 0). Row k of the stream is the row flown from t_k to t_{k+1}. Flown open loop by the
     same vehicle model from the recorded start, it reproduces the recorded Crazyflie run.
-    Recordings do not hold it yet: :data:`RECORDER_ADDITION` says what the recorder must add.
+    The recorder writes it (array ``setpoint``) for a vehicle fed setpoints (the Crazyflie).
 ``"trajectory"`` (what every recording allows)
     the recorded state itself: position and velocity at t_k, the acceleration over the
     period (v_{k+1} - v_k) / dt (what the particle model integrated, the mean acceleration for
@@ -45,7 +45,6 @@ from pairflock_env.recording.format import Recording, open_recording
 __all__ = [
     "COLUMNS",
     "FORMAT",
-    "RECORDER_ADDITION",
     "fly_stream",
     "read_setpoints",
     "setpoint_stream",
@@ -65,13 +64,6 @@ COLUMNS = (
     *((f"w{c}", "rad/s", f"body rate about body {c}") for c in "xyz"),
 )
 #: what the recorder must add for the ``"recorded"`` source
-RECORDER_ADDITION = (
-    "a per-step array 'setpoint' of scope 'uav' and shape (N, 10) (the Crazyflie model's "
-    "CMD_FIELDS), written only with dynamics='crazyflie': at each recorded step k >= 1 "
-    "core.vehicle.setpoint[b], the cmdFullState row the UAVs flew during the step that ended "
-    "at k (zeros at the reset); STEP_ARRAYS needs a per-item shape for it (10, not dim), and "
-    "recording with every=1 keeps every row"
-)
 _BODY_RATES = ("zero", "flatness")
 
 
@@ -135,8 +127,10 @@ def setpoint_stream(
         source = "recorded" if "setpoint" in rec else "trajectory"
     if source == "recorded":
         if "setpoint" not in rec:
-            raise ValueError(f"the recording has no 'setpoint' array: the recorder must add "
-                             f"{RECORDER_ADDITION}")  # fmt: skip
+            raise ValueError(
+                "the recording has no 'setpoint' array: it holds the setpoint rows a vehicle "
+                'fed setpoints flew (dynamics="crazyflie"); use source="trajectory"'
+            )
         cmd = np.asarray(rec["setpoint"], dtype=np.float64)[1:]
         if cmd.shape[-1] != len(CMD_FIELDS):
             raise ValueError(f"setpoint rows hold {cmd.shape[-1]} values, not {len(CMD_FIELDS)}")

@@ -35,6 +35,7 @@ def _step(t: int, n: int = N, dim: int = DIM) -> dict:
         safety_active=np.array([t % 2 == 0, False]),
         safety_correction=np.array([0.1 * t, 0.0]),
         closest_distance=np.full(n, 0.5 + t),
+        setpoint=np.arange(n * 10, dtype=np.float64).reshape(n, 10) - t,  # 10 values per UAV
         infos={"sim_time": 0.1 * t, "collisions": t // 3, "diverged": False},
     )
 

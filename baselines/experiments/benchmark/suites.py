@@ -31,7 +31,7 @@ SWARM_LAYERS = (
     ("swarm", (("safety_filter", "cbf"), ("safety_scope", "swarm"))),
 )
 #: the held-out seeds of the swarm layer's suites (never used to choose its parameters)
-SWARM_SEEDS = 71000
+SWARM_SEEDS = 72000
 
 SUITES: dict[str, Suite] = {
     "paper": Suite(
@@ -101,7 +101,7 @@ SUITES: dict[str, Suite] = {
         "every UAV safe (safety_scope='swarm', docs/swarm-safety.md): N = 20/50/100 x "
         "corners/random starts x smc, proportional, braking, the safe learned policy "
         "(sb3:pair_safe_a50), no filter vs the pair filter vs the swarm layer, 100 held-out "
-        "seeds 71000-71099",
+        "seeds 72000-72099",
         preset="paper",
         policies=("smc", "proportional", "braking", "sb3:pair_safe_a50"),
         seeds=100,
@@ -113,7 +113,7 @@ SUITES: dict[str, Suite] = {
     ),
     "swarm-safety-large": Suite(
         "the swarm layer among 1,000 UAVs (preset 'large'): smc and the safe learned policy, "
-        "no filter vs the pair filter vs the swarm layer, 20 held-out seeds 71000-71019",
+        "no filter vs the pair filter vs the swarm layer, 20 held-out seeds 72000-72019",
         preset="large",
         policies=("smc", "sb3:pair_safe_a50"),
         seeds=20,
@@ -124,7 +124,7 @@ SUITES: dict[str, Suite] = {
     ),
     "swarm-safety-10k": Suite(
         "the swarm layer among 10,000 UAVs (preset 'large', 10 pairs): smc, 5 held-out seeds "
-        "71000-71004 (run with --no-figures: a recorded 10,000-UAV episode takes 0.8 GB)",
+        "72000-72004 (run with --no-figures: a recorded 10,000-UAV episode takes 0.8 GB)",
         preset="large",
         policies=("smc",),
         seeds=5,

@@ -5,7 +5,7 @@ filter and with the swarm layer (``safety_scope="swarm"``, docs/swarm-safety.md)
 paper's flock collides at scale, and what the layer changes.
 
     python -m baselines.experiments.safety.nearest --out docs/img/swarm-nearest.png
-    python -m baselines.experiments.safety.nearest --n 100 1000 --seed 71000 --out nn.png
+    python -m baselines.experiments.safety.nearest --n 1000 --layers barrier --out nn.png
     python -m baselines.experiments.safety.nearest --replot nn.json --out nn.png
 
 Writes the figure and, beside it, the series as JSON (the figure's name with ``.json``):
@@ -30,13 +30,18 @@ from pairflock_env import PairFlockCore, make_config
 
 __all__ = ["LAYERS", "main", "nearest_figure", "nearest_series"]
 
-#: the two cases of every size: the paper's law, and the swarm layer (with its floor)
+#: the cases: the paper's law, the swarm layer (with its floor), the layer without the floor
 LAYERS = {
     "off": {},
     "swarm": {"safety_filter": "cbf", "safety_scope": "swarm"},
+    "barrier": {"safety_filter": "cbf", "safety_scope": "swarm", "swarm_repulsion_floor": False},
 }
 _PCT = (1, 10, 50)
-_STYLE = {"off": ("#c44e52", "no filter (eqs. 13-16)"), "swarm": ("#4c72b0", "swarm layer")}
+_STYLE = {
+    "off": ("#c44e52", "no filter (eqs. 13-16)"),
+    "swarm": ("#4c72b0", "swarm layer"),
+    "barrier": ("#55a868", "layer without the floor"),
+}
 
 
 def nearest_series(
@@ -110,9 +115,10 @@ def build_parser() -> ArgumentParser:
         description=__doc__.split("\n\n")[0],
     )
     p.add_argument("--n", type=int, nargs="+", default=[100, 1000, 10000], help="swarm sizes")
-    p.add_argument("--seed", type=int, default=71000, help="the seed of every flight")
+    p.add_argument("--seed", type=int, default=72000, help="the seed of every flight")
     p.add_argument("--every", type=float, default=0.5, help="sample period (s)")
     p.add_argument("--horizon", type=float, default=None, help="flight time (default 50 s)")
+    p.add_argument("--layers", nargs="+", default=["off", "swarm"], choices=list(LAYERS))
     p.add_argument("--out", type=Path, required=True, help="the figure (.png)")
     p.add_argument("--replot", type=Path, help="redraw from this JSON instead of flying")
     return p

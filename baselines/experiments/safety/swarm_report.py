@@ -9,11 +9,12 @@ Each RUN_DIR is a finished benchmark folder whose runs carry the whole swarm's c
 ``--set safety_scope=swarm``); the rows of several folders are pooled. A run's layer is
 ``off`` (no filter), ``pairs`` (the pair filter) or ``swarm`` (the swarm layer). Printed:
 
-* separation: per (N, start, policy, layer), the closest two UAVs over every run, the runs
-  with a step below safety_distance, infeasible UAV-steps (runs with any), active UAV-steps;
-* flock: per (N, start, policy), the median over seeds of swarm / off for the flock's
-  quality (radius of gyration, velocity mismatch, leader tracking, lattice deviation,
-  smallest largest component) and how many of those ratios lie within 10 %;
+* separation: per (N, start, policy), for each layer the runs with a step below
+  safety_distance and the closest two UAVs over every run, and the swarm layer's infeasible
+  UAV-steps (runs with any) and active UAV-steps;
+* flock: per (N, start, policy), the median over seeds of swarm / off (and swarm / pairs)
+  for the flock's quality (radius of gyration, velocity mismatch, leader tracking, lattice
+  deviation, smallest largest component) and how many of those ratios lie within 10 %;
 * pairs: per (N, start, policy), the median over (seed, pair) of swarm / pairs for the steady
   error and the band time, and the share of pairs in the 0.5 m band at the end per layer.
 """
@@ -72,23 +73,37 @@ def _groups(rows: Sequence[Row], swarm_only: bool) -> dict[tuple, list[Row]]:
 
 
 def separation_lines(rows: Sequence[Row]) -> list[str]:
-    """The separation table (one row per swarm run)."""
+    """The separation table (one row per swarm run), the layers side by side."""
+    groups = _groups(rows, True)
     lines = [
-        "| N | start | policy | layer | runs | closest two UAVs min (m) | runs with a step "
-        "< D_s | steps < D_s | infeasible UAV-steps | active UAV-steps median |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| N | start | policy | runs | runs with two UAVs < D_s: off / pairs / swarm | "
+        "closest two UAVs (m): off / pairs / swarm | infeasible UAV-steps (swarm) | "
+        "active UAV-steps per run, median (swarm) |",
+        "|---|---|---|---|---|---|---|---|",
     ]
-    for (n, init, pol, layer), g in _groups(rows, True).items():
-        below = np.array([_num(r["swarm_steps_below"]) for r in g])
-        inf = np.array([_num(r["swarm_infeasible_uav_steps"]) for r in g])
-        act = np.median([_num(r["swarm_active_uav_steps"]) for r in g])
-        closest = min(_num(r["swarm_closest"]) for r in g)
+    cases = dict.fromkeys(key[:3] for key in groups)
+    for n, init, pol in cases:
+        by = {lay: groups.get((n, init, pol, lay), []) for lay in ("off", "pairs", "swarm")}
+        below = " / ".join(
+            str(sum(_num(r["swarm_steps_below"]) > 0 for r in g)) if g else "-" for g in by.values()
+        )
+        closest = " / ".join(
+            f"{min(_num(r['swarm_closest']) for r in g):.3f}" if g else "-" for g in by.values()
+        )
+        sw = by["swarm"]
+        inf = np.array([_num(r["swarm_infeasible_uav_steps"]) for r in sw])
         infc = f"{int(inf.sum())} ({int(np.count_nonzero(inf))} runs)" if inf.any() else "0"
+        act = f"{np.median([_num(r['swarm_active_uav_steps']) for r in sw]):.0f}" if sw else "-"
         lines.append(
-            f"| {n} | {init} | {pol} | {layer} | {len(g)} | {closest:.3f} | "
-            f"{int(np.count_nonzero(below))} | {int(below.sum())} | {infc} | {act:.0f} |"
+            f"| {n} | {init or '-'} | {pol} | {len(sw)} | {below} | {closest} | {infc} | {act} |"
         )
     return lines
+
+
+def _median(v: np.ndarray) -> str:
+    """The median of the finite values (ratios of runs that never entered the band are NaN)."""
+    f = v[np.isfinite(v)]
+    return f"{np.median(f):.3f}" if f.size else "-"
 
 
 def _paired_ratio(a: Sequence[Row], b: Sequence[Row], metric: str, key) -> np.ndarray:
@@ -97,18 +112,19 @@ def _paired_ratio(a: Sequence[Row], b: Sequence[Row], metric: str, key) -> np.nd
     return np.asarray(out, float)
 
 
-def flock_lines(rows: Sequence[Row]) -> list[str]:
-    """swarm / off, paired by seed: median ratio [share within 10 %] per flock metric."""
+def flock_lines(rows: Sequence[Row], base: str = "off") -> list[str]:
+    """swarm / ``base`` (off or pairs), paired by seed: median ratio [share within 10 %]
+    per flock metric."""
     groups = _groups(rows, True)
-    head = " | ".join(f"{h} swarm/off" for _, h in FLOCK_RATIOS)
+    head = " | ".join(f"{h} swarm/{base}" for _, h in FLOCK_RATIOS)
     lines = [f"| N | start | policy | seeds | {head} |", "|---|---|---|---|" + "---|" * 5]
     for (n, init, pol, layer), g in groups.items():
-        off = groups.get((n, init, pol, "off"))
-        if layer != "swarm" or not off:
+        other = groups.get((n, init, pol, base))
+        if layer != "swarm" or not other:
             continue
         cells = []
         for metric, _ in FLOCK_RATIOS:
-            r = _paired_ratio(g, off, metric, lambda x: x["seed"])
+            r = _paired_ratio(g, other, metric, lambda x: x["seed"])
             ok = np.count_nonzero(np.abs(r - 1) <= _WITHIN)
             cells.append(f"{np.nanmedian(r):.3f} [{ok}/{r.size}]")
         lines.append(f"| {n} | {init} | {pol} | {len(g)} | " + " | ".join(cells) + " |")
@@ -136,8 +152,8 @@ def pair_lines(rows: Sequence[Row]) -> list[str]:
             hit = sum(math.isfinite(_num(r["band_time"])) for r in sel)
             reached.append(f"{hit}/{len(sel)}" if sel else "-")
         lines.append(
-            f"| {n} | {init} | {pol} | {len(g)} | {np.nanmedian(err):.3f} | "
-            f"{np.nanmedian(band):.3f} | {' / '.join(reached)} |"
+            f"| {n} | {init} | {pol} | {len(g)} | {_median(err)} | {_median(band)} | "
+            f"{' / '.join(reached)} |"
         )
     return lines
 
@@ -159,6 +175,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         for title, lines in (
             ("Separation of every two UAVs", separation_lines(rows)),
             ("The flock: swarm layer / no filter, paired by seed", flock_lines(rows)),
+            ("The flock: swarm layer / pair filter, paired by seed", flock_lines(rows, "pairs")),
             ("The pairs: swarm layer / pair filter, paired by seed and pair", pair_lines(rows)),
         ):
             print(f"\n## {title}\n")

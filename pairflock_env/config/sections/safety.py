@@ -99,8 +99,10 @@ def swarm_brake_accel(v: Any) -> float:
 
 def swarm_sensing_radius(v: Any) -> float:
     """The radius (m) within which two unpaired UAVs constrain each other: the field, or the
-    flocking radius r (what a UAV perceives in eq. 2)."""
-    return v.radius if v.swarm_sensing_radius is None else v.swarm_sensing_radius
+    paired UAVs' ``safety_sensing_radius`` (one radius for every row)."""
+    if v.swarm_sensing_radius is None:
+        return v.safety_sensing_radius
+    return v.swarm_sensing_radius
 
 
 def reaction_time(v: Any) -> float:
@@ -230,11 +232,13 @@ SAFETY = Section(
         ),
         Field(
             "swarm_sensing_radius",
-            OrNone(Real(1e-3, MAX_DISTANCE), "radius"),
+            OrNone(Real(1e-3, MAX_DISTANCE), "safety_sensing_radius"),
             None,
             "m",
             "Two unpaired UAVs constrain each other closer than this (swarm scope; rows with "
-            "a paired UAV use safety_sensing_radius); above safety_distance + safety_margin.",
+            "a paired UAV use safety_sensing_radius); above safety_distance + safety_margin. "
+            "Two unpaired UAVs closing at V m/s must first be sensed roughly "
+            "safety_distance + V^2 / (4 swarm_brake_accel) apart (docs/swarm-safety.md).",
         ),
         Field(
             "swarm_repulsion_floor",
@@ -299,7 +303,7 @@ def _swarm_radius_beyond(v: Any) -> str | None:
     r, D = swarm_sensing_radius(v), v.safety_distance + v.safety_margin
     if not r > D:
         return (
-            f"must keep the swarm sensing radius ({r:g} m; None: radius) above "
+            f"must keep the swarm sensing radius ({r:g} m; None: safety_sensing_radius) above "
             f"safety_distance + safety_margin ({D:g} m)"
         )
     return None
@@ -337,8 +341,8 @@ RULES = (
         "swarm_brake_accel <= swarm_accel_limit (each default or set)",
     ),
     Rule(
-        ("swarm_sensing_radius", "radius", "safety_distance", "safety_margin"),
+        ("swarm_sensing_radius", "safety_sensing_radius", "safety_distance", "safety_margin"),
         _swarm_radius_beyond,
-        "swarm_sensing_radius (default radius) > safety_distance + safety_margin",
+        "swarm_sensing_radius (default safety_sensing_radius) > safety_distance + safety_margin",
     ),
 )

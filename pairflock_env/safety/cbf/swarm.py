@@ -4,11 +4,12 @@ UAV it senses.
 
 It is the pair filter generalised (:mod:`.barrier`, docs/safety.md): the same braking-
 distance barrier, the same row writer, the same exact solver, run by every UAV. Since every
-UAV filters, no UAV is assumed unfiltered (``safety_other_accel`` is not used): each
-pairwise condition n . (a_i - a_j) >= sigma_min is split between the two UAVs in proportion
-to their brake accelerations (:mod:`.swarm_kernels`). An unpaired UAV's whole command lies
-in the ball ||a|| <= ``swarm_accel_limit``; a paired UAV keeps its pair budget,
-||a - f|| <= ``pair_accel_limit`` around its flocking command f.
+UAV filters, ``safety_other_accel`` is not used: each pairwise condition
+n . (a_i - a_j) >= sigma_min is split between the two UAVs in proportion to their brake
+accelerations, except that a paired UAV which out-brakes an unpaired UAV's whole bound takes
+their row alone (:mod:`.swarm_kernels`). An unpaired UAV's whole command lies in the ball
+||a|| <= ``swarm_accel_limit``; a paired UAV keeps its pair budget, ||a - f|| <=
+``pair_accel_limit`` around its flocking command f.
 
 >>> import numpy as np
 >>> from pairflock_env.safety import SafetyParams, SwarmFilter
@@ -89,6 +90,11 @@ class SwarmFilter:
         accel_limit: U_s, the ball of an unpaired UAV's whole command (m/s^2).
         brake_accel: alpha_s, an unpaired UAV's brake (m/s^2), in (0, accel_limit].
         swarm_radius: two unpaired UAVs constrain each other closer than this (m).
+
+    Attributes:
+        pair_alone: whether the paired UAVs take their rows against unpaired UAVs alone
+            (``brake_accel - accel_limit >= `` the unpaired brake; else those rows are
+            shared by brake capacity).
     """
 
     def __init__(
@@ -120,7 +126,11 @@ class SwarmFilter:
         mate[self.agents] = pair.partners
         slot = np.full(N, -1, np.int64)
         slot[self.agents] = np.arange(M)
-        self._ints = (paired, mate, self.agents, np.ones(N, np.bool_), slot)
+        #: a paired UAV takes its rows against unpaired UAVs alone when it out-brakes their
+        #: whole bound by at least their own brake (module docstring of .swarm_kernels)
+        self.pair_alone = bool(M) and P.brake_accel - U >= a
+        coop_p = paired if self.pair_alone else np.ones(N, np.bool_)
+        self._ints = (paired, mate, self.agents, np.ones(N, np.bool_), coop_p, slot)
         alpha = np.where(paired, P.brake_accel, a)
         bound = np.where(paired, P.accel_limit, U)
         self._reals = (alpha, bound, np.zeros(N))
@@ -133,6 +143,8 @@ class SwarmFilter:
             reaction_time=P.reaction_time,
             pair_radius2=P.sensing_radius**2,
             swarm_radius2=r * r,
+            other_accel=U,
+            pair_alone=float(self.pair_alone),
             skip_far=1.0,
         )
         K = WS_MAX + WS_ADD

@@ -11,12 +11,20 @@ ball):
 
 j writes the same row with n_ji = -n_ij and its own share, so the two add up to the pair
 filter's relative condition n_ij . (a_i - a_j) >= sigma_min: the reciprocal split of Wang,
-Ames and Egerstedt, weighted by brake capacity alpha. Two unpaired UAVs sense each other
-within ``swarm_radius2``, a pair of UAVs of which one is paired within ``pair_radius2`` (a
-partner at any distance): both sides of a pair see the same rows. Each search is shortened
-to where the far-UAV skip would drop every UAV at the swarm's speeds (relative to its mean
-velocity). An unpaired UAV's paired candidates come from a contact list that each paired UAV
-fills with one search, so a swarm costs O(N + M k), not O(N M).
+Ames and Egerstedt, weighted by brake capacity alpha. One exception (``pair_alone``): a
+paired UAV that out-brakes an unpaired UAV's whole bound U_s by at least that UAV's own brake
+(alpha_p - U_s >= alpha_s: 780 >= 16 m/s^2 in the paper's task) takes its rows against
+unpaired UAVs alone, as the pair filter does, with the unpaired UAV's acceleration at most
+U_s, which its ball guarantees: n_ij . a_i >= sigma_min(alpha_p - U_s) + U_s. The unpaired
+UAVs then have no rows against paired ones, so a pair closing on an unpaired UAV from two
+sides cannot make it infeasible.
+
+Two unpaired UAVs sense each other within ``swarm_radius2``, a pair of UAVs of which one is
+paired within ``pair_radius2`` (a partner at any distance): both sides of a pair see the same
+rows. Each search is shortened to where the far-UAV skip would drop every UAV at the
+swarm's speeds (relative to its mean velocity). Where the rows with paired UAVs are shared,
+an unpaired UAV's paired candidates come from a contact list that each paired UAV fills with
+one search, so a swarm costs O(N + M k), not O(N M).
 
 The rows come from :func:`~.kernels._constrain_one` and the solver is
 :func:`~.kernels._solve_ws`; numba's on-disk cache keys a compiled function on its own file
@@ -45,7 +53,9 @@ from pairflock_env.swarm.grid import within_radius
 __all__ = ["SWARM", "VEC_ROWS", "swarm_kernel"]
 
 #: the swarm layer's parameters (squared radii: the kernel compares squared distances;
-#: ``skip_far`` 1 drops the UAVs too far to bind, 0 evaluates every sensed UAV)
+#: ``pair_alone`` 1: a paired UAV takes its rows against unpaired UAVs alone, counting on
+#: their whole command being at most ``other_accel`` (U_s); ``skip_far`` 1 drops the UAVs
+#: too far to bind, 0 evaluates every sensed UAV)
 SWARM = KernelParams(
     "Swarm",
     (
@@ -56,6 +66,8 @@ SWARM = KernelParams(
         "reaction_time",
         "pair_radius2",
         "swarm_radius2",
+        "other_accel",
+        "pair_alone",
         "skip_far",
     ),
 )
@@ -80,6 +92,19 @@ def _far_of(pr, a_i, a_j, U_i, cn, A_i, A_j):
     R = np.sqrt(max(pr[_S.pair_radius2], pr[_S.swarm_radius2]))
     Ds, T, c = pr[_S.barrier_distance], pr[_S.dt], pr[_S.position_gain]
     return _far_constants(Ds, T, c, pr[_S.decay], pr[_S.reaction_time], a, S, A_i + A_j, R, a_i / a)
+
+
+@jit_inline
+def _far_alone(pr, a_i, U_i, cn, A_i, A_o):
+    """:func:`~.kernels._far_constants` of a paired UAV taking its row against an unpaired
+    UAV alone (``pair_alone``): the unpaired UAV's command is at most A_o = U_s (its ball),
+    so i needs n . a_i >= sigma_min + A_o with alpha_ij = a_i - A_o, implied by i's ball
+    once sigma_min <= -(U_i + cn + A_o)."""
+    S = (U_i + cn + A_o) * (1.0 + _S_PAD)
+    R = np.sqrt(max(pr[_S.pair_radius2], pr[_S.swarm_radius2]))
+    Ds, T, c = pr[_S.barrier_distance], pr[_S.dt], pr[_S.position_gain]
+    a = a_i - A_o
+    return _far_constants(Ds, T, c, pr[_S.decay], pr[_S.reaction_time], a, S, A_i + A_o, R, 1.0)
 
 
 @jit_kernel
@@ -211,17 +236,20 @@ def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, use_grid, g, hi
 @jit_inline
 def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, use_grid, g, hits, vec, spd, G, rhs):
     """UAV i's rows into G, rhs: the unpaired UAVs within its shortened radius, then the
-    paired ones (every agent, for a paired i; its contact list, for an unpaired one).
-    ``far_u`` / ``far_p``: i's far constants against the two classes; ``ints`` = (paired,
-    mate, agents, coop, cstart, clist); ``spd`` = (vo, pad). Returns (K, min H, ok)."""
-    paired, mate, agents, coop, cstart, clist = ints
+    paired ones (every agent, for a paired i; its contact list, for an unpaired one unless
+    the paired UAVs take those rows alone). ``far_u`` / ``far_p``: i's far constants
+    against the two classes; ``ints`` = (paired, mate, agents, coop_u, coop_p, cstart,
+    clist), coop_* telling, for an unpaired and for a paired i, which UAVs share its rows;
+    ``spd`` = (vo, pad). Returns (K, min H, ok)."""
+    paired, mate, agents, coop_u, coop_p, cstart, clist = ints
     vo, pad = spd
     D = q.shape[2]
     Ds, T, c, lam = pr[_S.barrier_distance], pr[_S.dt], pr[_S.position_gain], pr[_S.decay]
-    tau, prune = pr[_S.reaction_time], pr[_S.skip_far] != 0.0
+    tau, prune, A_o = pr[_S.reaction_time], pr[_S.skip_far] != 0.0, pr[_S.other_accel]
     R2p = pr[_S.pair_radius2]
     Rs2 = max(R2p, pr[_S.swarm_radius2])
     r2 = R2p if paired[i] else pr[_S.swarm_radius2]
+    coop = coop_p if paired[i] else coop_u
     if prune:  # out to where the skip drops every unpaired UAV (W: a relative speed bound)
         W = (_own_speed(p, b, i, vec[_CBAR]) + vo) * (1.0 + 1e-9) + pad
         r = _far_radius(W, far_u)
@@ -236,7 +264,7 @@ def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, use_grid, g, hits, vec, spd
         if paired[j]:
             continue
         K, hmin, ok = _constrain_one(
-            b, i, j, -1, q, p, ctr, paired, coop, Ds, 0.0, r2, lam, T, c, tau, U, G, rhs, nv,
+            b, i, j, -1, q, p, ctr, paired, coop, Ds, A_o, r2, lam, T, c, tau, U, G, rhs, nv,
             K, hmin, far_u, far_p, prune, Rs2,
         )  # fmt: skip
         if not ok:
@@ -247,7 +275,7 @@ def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, use_grid, g, hits, vec, spd
         if j == i:
             continue
         K, hmin, ok = _constrain_one(
-            b, i, j, mate[i], q, p, ctr, paired, coop, Ds, 0.0, R2p, lam, T, c, tau, U, G, rhs,
+            b, i, j, mate[i], q, p, ctr, paired, coop, Ds, A_o, R2p, lam, T, c, tau, U, G, rhs,
             nv, K, hmin, far_u, far_p, prune, Rs2,
         )  # fmt: skip
         if not ok:
@@ -280,7 +308,7 @@ def _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver):
 @jit_kernel
 def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, g, outs, work, solver):
     """Every UAV of swarm b (see :func:`swarm_kernel` for the arguments)."""
-    paired, mate, agents, coop, slot = ints
+    paired, mate, agents, coop_u, coop_p, slot = ints
     alpha, bound, abound = reals
     a_out, u_out, active, corr, infeas, hmin = outs
     hits, cstart, cnt, clist, G, rhs, vec = work
@@ -289,11 +317,16 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, g, outs, work, s
     a_u, U_u, a_p = _class_values(paired, alpha, bound)
     Au, Ap = _abounds(f, b, paired, bound, abound)
     spd = _speeds(p, b, paired, vec[_CBAR])
+    alone = pr[_S.pair_alone] != 0.0
     far_uu = _far_of(pr, a_u, a_u, U_u, 0.0, Au, Au)
     far_up = _far_of(pr, a_u, a_p, U_u, 0.0, Au, Ap)
-    _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, grid, g, hits, vec, far_up,
-              a_u, Au, spd, cstart, cnt, clist)  # fmt: skip
-    rows = (paired, mate, agents, coop, cstart, clist)
+    if alone:  # the unpaired UAVs have no rows against paired ones
+        for i in range(q.shape[1] + 1):
+            cstart[i] = 0
+    else:
+        _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, grid, g, hits, vec,
+                  far_up, a_u, Au, spd, cstart, cnt, clist)  # fmt: skip
+    rows = (paired, mate, agents, coop_u, coop_p, cstart, clist)
     ctr = vec[_CTR]
     for i in range(q.shape[1]):
         U = bound[i]
@@ -302,7 +335,10 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, g, outs, work, s
             ctr[k] = f[b, i, k] if paired[i] else 0.0
         if paired[i]:  # its own constants: its ball is around its flocking command
             cn = abound[i] - bound[i]
-            far_u = _far_of(pr, alpha[i], a_u, U, cn, abound[i], Au)
+            if alone:
+                far_u = _far_alone(pr, alpha[i], U, cn, abound[i], pr[_S.other_accel])
+            else:
+                far_u = _far_of(pr, alpha[i], a_u, U, cn, abound[i], Au)
             far_p = _far_of(pr, alpha[i], a_p, U, cn, abound[i], Ap)
         K, h, ok = _uav_rows(q, p, b, i, rows, pr, far_u, far_p, U, grid, g, hits, vec, spd, G, rhs)
         violated, status = _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver)
@@ -326,8 +362,9 @@ def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, g, outs, work, solve
     Args:
         q, p: (B, N, dim) positions and velocities; a_nom: (B, N, dim) nominal commands
             (flocking + pair term); f: (B, N, dim) flocking commands.
-        ints: (paired (N,) bool, mate (N,) partner or -1, agents (M,), coop (N,) all True,
-            slot (N,) each UAV's agent column or -1).
+        ints: (paired (N,) bool, mate (N,) partner or -1, agents (M,), coop_u (N,) all True,
+            coop_p (N,) the UAVs that share a paired UAV's rows (all, or with ``pair_alone``
+            the paired ones), slot (N,) each UAV's agent column or -1).
         reals: (alpha (N,) brake, bound (N,) U_i, abound (N,) scratch).
         pr: :data:`SWARM` vector; use_grid, g: a grid of q (GridArrays) to search, or not.
         outs: (a_out (B, N, dim), u_out (B, M, dim) the agents' x, active, correction,
