@@ -36,17 +36,21 @@ import numpy as np
 
 from pairflock_env.config import PairFlockConfig, make_config
 from pairflock_env.config.arrays import real_array
-from pairflock_env.dynamics import make_vehicle
+from pairflock_env.dynamics import ParticleModel, QuadrotorModel, make_vehicle
+from pairflock_env.kernels import jit_kernel
 from pairflock_env.safety import make_safety_stage
+from pairflock_env.safety.stage import NoFilterStage
 from pairflock_env.seeding import swarm_generators
 from pairflock_env.swarm.grid import NeighborGrid
 from pairflock_env.swarm.leader import make_leader
 from pairflock_env.swarm.passes import NeighborPass
 from pairflock_env.swarm.placement import check_reset_options, initial_state, pinning_mask
-from pairflock_env.task.actions import check_pair_actions, decode_pair_actions
+from pairflock_env.task.actions import add_pair_command, check_pair_actions, decode_pair_actions
+from pairflock_env.task.agent_pass import AGENT_ROWS, AgentPass
 from pairflock_env.task.delay import PartnerDelayBuffer
 from pairflock_env.task.infos import (
     AGENT_INFO_KEYS,
+    SAFETY_SWARM_INFO_KEYS,
     SWARM_INFO_KEYS,
     StepResult,
     hold_last_finite,
@@ -58,13 +62,7 @@ from pairflock_env.task.observations import (
     ObsLayout,
     add_sensor_noise,
 )
-from pairflock_env.task.rewards import (
-    DIVERGENCE_PENALTY,
-    episode_end,
-    may_overflow,
-    reward_terms,
-    total_reward,
-)
+from pairflock_env.task.rewards import DIVERGENCE_PENALTY, REWARD_TERMS, episode_end, may_overflow
 
 __all__ = [
     "AGENT_INFO_KEYS",
@@ -81,6 +79,14 @@ SeedLike = int | np.random.SeedSequence | None
 #: a diverging swarm overflows on its way out; the step checks its results itself (a swarm
 #: with non-finite values is flagged ``diverged``), so numpy's warnings would only be noise
 _CHECKED_FP = dict(over="ignore", invalid="ignore", divide="ignore")
+
+
+@jit_kernel
+def _tick(steps, t, dt):
+    """One control step more on every swarm's clock: t = steps dt."""
+    for b in range(steps.shape[0]):
+        steps[b] += 1
+        t[b] = steps[b] * dt
 
 
 def check_count(name: str, value: Any) -> None:
@@ -134,6 +140,9 @@ class PairFlockCore:
         self.agent_uavs, self.partner_uavs = sw.agent_uavs, sw.partner_uavs  # (M,) A0, B0, ...
         self.agent_pair, self.partner_of = sw.agent_pair, sw.partner_of  # (M,), (N,)
         self._agent_dm = sw.agent_dm  # (M,)
+        self._agents = AgentPass(
+            cfg, self.layout, self.agent_uavs, self.partner_uavs, self.agent_pair, sw.agent_dm
+        )
         self._leader = make_leader(cfg)
         self.vehicle = make_vehicle(cfg, B)
         # stage 2b (safety_filter); the partner is constrained at any distance
@@ -157,7 +166,18 @@ class PairFlockCore:
             else None
         )
         self._is_reset = np.zeros(B, bool)
+        self._all_reset = False
         self._check_finite = may_overflow(cfg)
+        #: whether the agents perceive something other than the true state (delay, noise) or
+        #: extra fields: those fields are then filled on top of the agents' pass
+        noisy = cfg.obs_noise_position > 0 or cfg.obs_noise_velocity > 0
+        self._perceived = bool(cfg.partner_delay or noisy or cfg.obs_extra)
+        #: whether a step does no numpy arithmetic that could overflow (a diverging swarm's
+        #: overflow would only raise warnings, which the step masks otherwise)
+        self._no_filter = type(self.safety) is NoFilterStage
+        numba_stages = type(self.vehicle) in (ParticleModel, QuadrotorModel)
+        numba_stages &= cfg.safety_filter == "none" and cfg.disturbance_std == 0
+        self._quiet = numba_stages and not (self._perceived or self._check_finite)
         self._rngs: list[np.random.Generator] = [
             g if g is not None else np.random.default_rng() for g in self._make_rngs(seed, B)
         ]
@@ -268,6 +288,7 @@ class PairFlockCore:
         self.steps[rows] = 0
         self.vehicle.reset_rows(rows, self.q, self.p)
         self._is_reset[rows] = True
+        self._all_reset = bool(self._is_reset.all())
         zeros_u = np.zeros((B, self.n_agents, D))
         with np.errstate(**_CHECKED_FP):
             res = self._refresh(zeros_u, np.zeros((B, self.n_agents), bool), reset_rows=rows)
@@ -314,12 +335,17 @@ class PairFlockCore:
         grid = self.neighbor_grid  # of this state, from the last pass (None: all pairs)
         u = self.safety.apply(self.q, self.p, self._flock_out["acc"], u, grid)  # 2b. safety filter
         self.pair_command = u
+        if self._quiet:  # every stage below runs in numba: no floating-point flags to mask
+            return self._advance(u, clipped)
         with np.errstate(**_CHECKED_FP):
-            a_des = self._desired_acceleration(u)  # 3. flocking + pair term (+ disturbance)
-            self.vehicle.advance(self.q, self.p, a_des)  # 4. the vehicle model tracks a_des
-            self.steps += 1
-            np.multiply(self.steps, self.config.dt, out=self.t)  # no drift from repeated sums
-            return self._refresh(u, clipped)
+            return self._advance(u, clipped)
+
+    def _advance(self, u: np.ndarray, clipped: np.ndarray) -> StepResult:
+        """Stages 3-5 of a step, from the (filtered) pair command u."""
+        a_des = self._desired_acceleration(u)  # 3. flocking + pair term (+ disturbance)
+        self.vehicle.advance(self.q, self.p, a_des)  # 4. the vehicle model tracks a_des
+        _tick(self.steps, self.t, self.config.dt)  # t = steps dt: no drift from repeated sums
+        return self._refresh(u, clipped)
 
     def _desired_acceleration(self, u: np.ndarray) -> np.ndarray:
         """a_des (B, N, dim): the flocking command of the current state, plus the pair
@@ -330,8 +356,7 @@ class PairFlockCore:
         if whole is not None:
             a_des = whole.copy()
         else:
-            a_des = self._flock_out["acc"].copy()
-            a_des[:, self.agent_uavs] += u
+            a_des = add_pair_command(self._flock_out["acc"], self.agent_uavs, u)
         if self.config.disturbance_std > 0:
             a_des += self.config.disturbance_std * self._draw_normal(a_des.shape[1:])
         return a_des
@@ -341,7 +366,7 @@ class PairFlockCore:
         return np.stack([g.standard_normal(shape) for g in self._rngs])
 
     def _require_reset(self) -> None:
-        if not self._is_reset.all():
+        if not self._all_reset:
             rows = np.flatnonzero(~self._is_reset).tolist()
             raise RuntimeError(f"call reset() before step(): swarms {rows} were never reset")
 
@@ -353,48 +378,55 @@ class PairFlockCore:
         flags and infos."""
         cfg = self.config
         lq, lp = self._leader.state(self.t)
-        fl, pair = self._neighbor_pass(lq, lp)
-        obs = self._observation(pair, lq, lp, reset_rows)
-        finite = np.isfinite(obs).all(axis=(1, 2))
+        fl, pp = self._neighbor_pass(lq, lp)
+        obs, res, finite = self._observation(fl, pp, lq, lp, u, reset_rows)
         if self._noise is not None and not finite.all():
             finite = self._saturate_noise(obs)
         diverged = fl["diverged"] | ~finite
-        terms = reward_terms(cfg, pair["pair_error"], u, pair["min_separation"])
-        reward = total_reward(terms)
+        rows = dict(zip(AGENT_ROWS, res, strict=True))
+        reward = rows["reward"]
         if self._check_finite:  # an extreme config: what overflows still ends as a divergence
-            finite = np.isfinite(reward) & np.isfinite(pair["sliding_surface"])
+            finite = np.isfinite(reward) & np.isfinite(rows["sliding_surface"])
             diverged |= ~finite.all(axis=1)
         safety = self.safety.info(reset=reset_rows is not None)
-        info = make_info(pair, fl, u, clipped, self.t, diverged, terms, safety)
-        if diverged.any():  # a diverged swarm keeps its last finite observation and infos
+        if self._no_filter:  # what make_info would count: no UAV's command was changed
+            B = self.num_swarms
+            safety |= {k: np.zeros(B, np.int64) for k in SAFETY_SWARM_INFO_KEYS}
+        terms = {k: rows[f"reward_{k}"] for k in REWARD_TERMS}
+        info = make_info(rows, fl, u, clipped, self.t, diverged, terms, safety, rows["pair_accel"])
+        if np.count_nonzero(
+            diverged
+        ):  # a diverged swarm keeps its last finite observation and infos
             obs[diverged] = self._obs[diverged]
             hold_last_finite(info, self._info, diverged)
             reward[diverged] = -DIVERGENCE_PENALTY
         self._obs, self._info = obs, info
         vinfo = self.vehicle.info()
         terminated, truncated = episode_end(
-            cfg, diverged, vinfo, pair["min_separation"], self.steps
+            cfg, diverged, vinfo, info["min_separation"], self.steps
         )
-        info.update(vinfo)
+        if vinfo:
+            info.update(vinfo)
         return StepResult(obs, reward, terminated, truncated, info)
 
     def _neighbor_pass(self, lq: np.ndarray, lp: np.ndarray) -> tuple[dict, dict[str, np.ndarray]]:
-        """The flocking pass of the current state and the agents' pair quantities (B, M)
+        """The flocking and pair passes of the current state
         (:class:`~pairflock_env.swarm.passes.NeighborPass`)."""
-        fl, pair = self._neighbors.run(self.q, self.p, lq, lp, self._pinned)
+        fl, pp = self._neighbors.run(self.q, self.p, lq, lp, self._pinned)
         self._flock_out = fl
-        return fl, pair
+        return fl, pp
 
     def _perceived_partner(
-        self, pair: Mapping[str, np.ndarray], reset_rows: np.ndarray | None
+        self, reset_rows: np.ndarray | None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Partner offset, velocity and flocking command as the agents perceive them:
         ``partner_delay`` steps old and with sensor noise (when configured)."""
         cfg = self.config
         self._noise = None
         acc = self._flock_out["acc"]
-        qa, pa = pair["q"], pair["p"]
-        off, vel = pair["offset"], pair["velocity"]
+        qa, pa = self.q.take(self.agent_uavs, axis=1), self.p.take(self.agent_uavs, axis=1)
+        off = self.q.take(self.partner_uavs, axis=1) - qa
+        vel = self.p.take(self.partner_uavs, axis=1) - pa
         acc_partner = acc[:, self.partner_uavs]
         if self._delay is not None:
             now = np.stack([qa, pa, acc[:, self.agent_uavs]])  # (3, B, M, D)
@@ -423,44 +455,37 @@ class PairFlockCore:
 
     def _observation(
         self,
-        pair: Mapping[str, np.ndarray],
+        fl: Mapping[str, np.ndarray],
+        pp: Mapping[str, np.ndarray],
         lq: np.ndarray,
         lp: np.ndarray,
+        u: np.ndarray,
         reset_rows: np.ndarray | None,
-    ) -> np.ndarray:
-        """The observation (B, M, obs_size) float32 of the current state (layout by name)."""
-        off, vel, acc_partner = self._perceived_partner(pair, reset_rows)
-        qa, pa = pair["q"], pair["p"]
-        pp = self._neighbors.pair_out
-        B, M = qa.shape[:2]
-        fields = {
-            "partner_offset": off,
-            "partner_velocity": vel,
-            "target_distance": self._agent_dm[None, :, None],
-            "shared_neighbors": pair["shared_neighbors"][..., None],
-            "leader_offset": lq[:, None, :] - qa,
-            "leader_velocity": lp[:, None, :] - pa,
-            "flock_accel": self._flock_out["acc"][:, self.agent_uavs],
-            "partner_flock_accel": acc_partner,
-            "neighbor_offsets": pp["nbr_pos"],
-            "neighbor_velocities": pp["nbr_vel"],
-            "neighbor_mask": pp["nbr_mask"],
-        }
-        if self.config.obs_extra:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The agents' pass (:mod:`~pairflock_env.task.agent_pass`): the observation (B, M,
+        obs_size) float32 of the current state (layout by name), the per-agent results
+        ``AGENT_ROWS`` and whether each swarm's observation is finite. The partner delay,
+        sensor noise and registered extra fields, when configured, replace their fields."""
+        obs, res, finite, closest = self._agents.run(
+            self.q, self.p, fl["acc"], fl["min_d2"], lq, lp, u, pp
+        )
+        fl["swarm_min_separation"] = closest
+        if not self._perceived:
+            return obs, res, finite
+        cfg = self.config
+        off, vel, acc_partner = self._perceived_partner(reset_rows)
+        fields = {"partner_offset": off, "partner_velocity": vel}
+        fields["partner_flock_accel"] = acc_partner
+        if cfg.obs_extra:
             ctx = ObservationContext(
-                self.config,
-                self.q,
-                self.p,
-                self.t,
-                lq,
-                lp,
-                self.agent_uavs,
-                self.partner_uavs,
-                self._flock_out["acc"],
-            )
-            for name in self.config.obs_extra:
+                cfg, self.q, self.p, self.t, lq, lp, self.agent_uavs, self.partner_uavs, fl["acc"]
+            )  # fmt: skip
+            for name in cfg.obs_extra:
                 fields[name] = OBSERVATIONS[name].value(ctx)
-        return self.layout.fill((B, M), fields)
+        B, M = obs.shape[:2]
+        for name, v in fields.items():
+            obs[:, :, self.layout.slice(name)] = v.reshape(B, M, -1)
+        return obs, res, np.isfinite(obs).all(axis=(1, 2))
 
     def observe(self) -> np.ndarray:
         """The current observation (B, M, obs_size), float32 (a copy)."""

@@ -24,9 +24,19 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
 
-__all__ = ["KernelParams", "jit_inline", "jit_kernel"]
+__all__ = [
+    "BoundKernel",
+    "KernelParams",
+    "bits_float",
+    "float_bits",
+    "jit_inline",
+    "jit_kernel",
+    "low_bit",
+]
 
 jit_kernel = functools.partial(njit, cache=True, nogil=True, _nrt=False)
 jit_inline = functools.partial(njit, cache=True, inline="always", _nrt=False)
@@ -64,3 +74,58 @@ class KernelParams:
     def unpack(self, vector: np.ndarray) -> dict[str, float]:
         """The named values of a packed vector (for tests and messages)."""
         return {n: float(vector[i]) for i, n in enumerate(self.names)}
+
+
+class BoundKernel:
+    """A kernel with its arguments after the state fixed, for repeated calls on the same
+    buffers: ``run(*state)`` calls ``kernel(*state, *tail)`` and returns ``out`` (what the
+    kernel fills). Picklable, unlike a closure, so that an env holding one can be saved."""
+
+    def __init__(self, kernel: Any, tail: tuple, out: Any) -> None:
+        self.kernel, self.tail, self.out = kernel, tail, out
+
+    def __call__(self, *state: Any) -> Any:
+        self.kernel(*state, *self.tail)
+        return self.out
+
+
+# ---------------------------------------------------------------------------------------
+# bit-level helpers the kernels need and numba does not offer
+# ---------------------------------------------------------------------------------------
+@intrinsic
+def float_bits(typingctx, x):
+    """The bits of a float64 as a uint64. Non-negative floats (and +inf) order like their
+    bits, and every NaN (of either sign) lies above +inf as an unsigned integer, so a
+    minimum of bits taken from +inf's never picks a NaN: it is the minimum of ``if d < m:
+    m = d`` exactly, and it vectorises (the float comparison does not)."""
+    if x != types.float64:
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.IntType(64))
+
+    return types.uint64(types.float64), codegen
+
+
+@intrinsic
+def bits_float(typingctx, x):
+    """The float64 whose bits are the uint64 ``x`` (the inverse of :func:`float_bits`)."""
+    if x != types.uint64:
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], ir.DoubleType())
+
+    return types.float64(types.uint64), codegen
+
+
+@intrinsic
+def low_bit(typingctx, x):
+    """The index of the lowest set bit of the uint64 ``x`` (64 when x = 0), as int64."""
+    if x != types.uint64:
+        return None
+
+    def codegen(context, builder, signature, args):
+        return builder.cttz(args[0], ir.Constant(ir.IntType(1), 0))
+
+    return types.int64(types.uint64), codegen

@@ -9,6 +9,7 @@ import numpy as np
 
 from pairflock_env.config import PairFlockConfig
 from pairflock_env.interfaces.base import LearningInterface, symlog
+from pairflock_env.interfaces.pair_kernels import decode_rows, encode_rows, reward_rows
 from pairflock_env.interfaces.pair_params import PairInterfaceParams
 from pairflock_env.layout import Field as LayoutField
 from pairflock_env.layout import FlatLayout
@@ -72,6 +73,13 @@ _CLIP = 5.0
 _SYMLOG_DIV = 8.0
 
 
+def _rows(obs: np.ndarray) -> np.ndarray:
+    """Observations (..., obs_size) as C-ordered rows (n, obs_size), float32 or float64."""
+    if obs.dtype != np.float32:
+        obs = obs.astype(np.float64, copy=False)
+    return np.ascontiguousarray(obs.reshape(-1, obs.shape[-1]))
+
+
 class PairInterface(LearningInterface):
     """Pair-frame observation, feed-forward + pair-frame action, log-accuracy reward.
 
@@ -119,6 +127,7 @@ class PairInterface(LearningInterface):
             (LayoutField(n, (k,), "1", self.FIELD_DOCS[n]) for n, k in sizes.items()),
             "encoded observation",
         )
+        self._kernel_args()
 
     @property
     def observation_size(self) -> int:
@@ -141,67 +150,62 @@ class PairInterface(LearningInterface):
     }
 
     # ------------------------------------------------------------------ encode
+    def _kernel_args(self) -> None:
+        """The kernels' field offsets and parameters, resolved once."""
+        p, lay, feat = self.params, self.layout, self.features
+
+        def at(layout, *names):
+            return [layout.slice(n).start if n in layout else -1 for n in names]
+
+        obs_at = at(lay, "partner_offset", "partner_velocity", "target_distance", "flock_accel")
+        obs_at += at(lay, "partner_flock_accel", "neighbor_offsets", "neighbor_velocities")
+        obs_at += at(lay, "neighbor_mask")
+        enc_at = at(feat, "error", "rel_velocity", "flock_difference", "flock_accel")
+        enc_at += at(feat, "neighbor_offsets", "neighbor_velocities", "neighbor_mask")
+        enc_at += at(feat, "neighbor_tca", "neighbor_miss")
+        self._enc_at = np.array(obs_at + enc_at, np.int64)
+        self._fine = (feat.slice("error_fine"), feat.slice("rel_velocity_fine"))
+        enc = (p.position_scale, p.velocity_scale, p.fine_position, p.fine_velocity)
+        self._enc_prm = np.array([*enc, p.max_accel, p.neighbor_scale, p.tca_horizon])
+        K = self.config.obs_neighbors
+        self._sort = (np.zeros(max(K, 1), np.int64), np.zeros(max(K, 1)))
+        self._dec_at = np.array([obs_at[0], obs_at[3], obs_at[4]], np.int64)
+        L = float(self.config.pair_accel_limit)
+        bound = min(p.max_accel, L)
+        self._dec_prm = np.array([p.accel_scale, float(p.feedforward), bound, L])
+        self._rew_at = np.array([*obs_at[5:8], K], np.int64)
+        cfg = self.config
+        rew = (p.w_error, p.w_progress, p.position_scale, p.w_band, p.band, p.w_effort)
+        rew += (cfg.dim, p.w_separation, p.separation_distance, cfg.collision_distance)
+        rew += (p.w_collision, p.w_cohesion, p.cohesion_distance, p.approach_horizon)
+        self._rew_prm = np.array([*rew, DIVERGENCE_PENALTY], np.float64)
+        self._dims = (0,) * self.config.dim
+
     def encode(self, obs: np.ndarray) -> np.ndarray:
-        obs = self._check_obs(obs)
+        obs = self._check_obs_shape(obs)
         # flocking terms in units of the policy's own budget (stored with the model), so that
         # the features mean the same in an env with another pair_accel_limit
-        p, L, lay = self.params, self.params.max_accel, self.layout
-        z = lay.get(obs, "partner_offset")
-        v = lay.get(obs, "partner_velocity")
-        dm = lay.get(obs, "target_distance")
-        fi = lay.get(obs, "flock_accel")
-        fj = lay.get(obs, "partner_flock_accel")
-        R = pair_basis(z)
-        e = np.sqrt(np.einsum("...k,...k->...", z, z))[..., None] - dm
-        vp = _to_frame(R, v)
-        parts = [
-            np.clip(e / p.position_scale, -_CLIP, _CLIP),
-            symlog(e / p.fine_position) / _SYMLOG_DIV,
-            np.clip(vp / p.velocity_scale, -_CLIP, _CLIP),
-            symlog(vp / p.fine_velocity) / _SYMLOG_DIV,
-            np.clip(_to_frame(R, fj - fi) / L, -_CLIP, _CLIP),
-            np.clip(_to_frame(R, fi) / L, -_CLIP, _CLIP),
-        ]
-        if p.threat_neighbors:
-            x = lay.get(obs, "neighbor_offsets")  # (..., K, D)
-            w = lay.get(obs, "neighbor_velocities")
-            mask = lay.get(obs, "neighbor_mask")  # (..., K)
-            tca, miss = closest_approach(x, w, p.tca_horizon)
-            # the most threatening first: smallest distance at closest approach (empty last)
-            order = np.argsort(np.where(mask > 0, miss, np.inf), axis=-1, kind="stable")
-            order = order[..., : p.threat_neighbors]
-            x = np.take_along_axis(x, order[..., None], axis=-2)
-            w = np.take_along_axis(w, order[..., None], axis=-2)
-            mask = np.take_along_axis(mask, order, axis=-1)
-            tca = np.take_along_axis(tca, order, axis=-1)
-            miss = np.take_along_axis(miss, order, axis=-1)
-            xp = _to_frame(R, x)
-            wp = _to_frame(R, w)
-            lead = obs.shape[:-1]
-            m = mask[..., None]
-            parts += [
-                (np.clip(xp / p.neighbor_scale, -_CLIP, _CLIP) * m).reshape((*lead, -1)),
-                (np.clip(wp / p.velocity_scale, -_CLIP, _CLIP) * m).reshape((*lead, -1)),
-                mask,
-                tca / p.tca_horizon * mask,
-                np.minimum(miss / p.neighbor_scale, _CLIP) * mask,
-            ]
-        out = np.concatenate(parts, axis=-1)
-        return np.clip(out, -_CLIP, _CLIP).astype(np.float32)
+        lead = obs.shape[:-1]
+        rows = _rows(obs)
+        n = rows.shape[0]
+        out = np.empty((n, self.features.size))
+        fine = np.empty((n, 1 + self.config.dim))
+        order, keys = self._sort
+        args = (self._enc_at, self._enc_prm, self.params.threat_neighbors, self._dims)
+        encode_rows(rows, *args, out, fine, order, keys)
+        sl_e, sl_v = self._fine
+        out[:, sl_e] = np.clip(symlog(fine[:, :1]) / _SYMLOG_DIV, -_CLIP, _CLIP)
+        out[:, sl_v] = np.clip(symlog(fine[:, 1:]) / _SYMLOG_DIV, -_CLIP, _CLIP)
+        return out.astype(np.float32).reshape(*lead, -1)
 
     # ------------------------------------------------------------------ decode
     def decode(self, obs: np.ndarray, action: np.ndarray) -> np.ndarray:
-        obs = self._check_obs(obs)
-        a = np.clip(self._check_action(action, obs.shape[:-1]), -1.0, 1.0)
-        lay, L = self.layout, self.config.pair_accel_limit
-        z = lay.get(obs, "partner_offset")
-        R = pair_basis(z)
-        u = self.params.accel_scale * np.einsum("...ji,...j->...i", R, a)  # R^T a
-        if self.params.feedforward:
-            u = u + pair_feedforward(lay, obs)
-        bound = min(self.params.max_accel, L)
-        over = np.sqrt(np.einsum("...k,...k->...", u, u))[..., None] / bound
-        return u / (L * np.maximum(over, 1.0))
+        obs = self._check_obs_shape(obs)
+        lead = obs.shape[:-1]
+        a = self._check_action(action, lead).reshape(-1, self.config.dim)
+        out = np.empty(a.shape)
+        decode_rows(_rows(obs), self._dec_at, a, self._dec_prm, self._dims, out)
+        return out.reshape(*lead, self.config.dim)
 
     def action_for(self, obs: np.ndarray, u: np.ndarray) -> np.ndarray:
         """The network action in [-1, 1]^dim for a world-frame pair acceleration ``u`` (m/s^2):
@@ -221,27 +225,24 @@ class PairInterface(LearningInterface):
         p, cfg = self.params, self.config
         err = np.abs(np.asarray(info["pair_error"], dtype=np.float64))
         sep = np.asarray(info["min_separation"], dtype=np.float64)
-        if obs is not None and p.approach_horizon > 0 and cfg.obs_neighbors:
-            obs = self._check_obs(obs)
-            _, miss = closest_approach(
-                self.layout.get(obs, "neighbor_offsets"),
-                self.layout.get(obs, "neighbor_velocities"),
-                p.approach_horizon,
-            )
-            miss = np.where(self.layout.get(obs, "neighbor_mask") > 0, miss, np.inf)
-            sep = np.minimum(sep, miss.min(axis=-1))
-        a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
-        r = -p.w_error * np.log1p(err / p.error_scale) - p.w_progress * err / p.position_scale
-        r -= p.w_band * (err > p.band)
-        r -= p.w_effort * np.einsum("...k,...k->...", a, a) / cfg.dim
-        r -= p.w_separation * np.maximum(0.0, p.separation_distance - sep) / p.separation_distance
-        r -= p.w_collision * (sep < cfg.collision_distance)
-        # a UAV with no other UAV at all (n_uavs = 2) has no flock to leave
-        far = np.maximum(0.0, sep - p.cohesion_distance) if cfg.n_uavs > 2 else 0.0
-        r -= p.w_cohesion * far / p.position_scale
+        lead = err.shape
+        approach = obs is not None and p.approach_horizon > 0 and cfg.obs_neighbors > 0
+        rows = _rows(self._check_obs_shape(obs)) if approach else np.zeros((1, self.layout.size))
+        log_err = np.log1p(err / p.error_scale)  # numpy's logarithm (pair_kernels' docstring)
         diverged = np.asarray(info["diverged"], dtype=bool)
-        r[diverged] = -DIVERGENCE_PENALTY
-        return r
+        if diverged.shape != lead:  # per swarm: every agent of a diverged swarm
+            diverged = diverged.reshape(diverged.shape + (1,) * (err.ndim - diverged.ndim))
+            diverged = np.broadcast_to(diverged, lead)
+        if sep.shape != lead:
+            sep = np.broadcast_to(sep, lead)
+        a = np.asarray(action, dtype=np.float64).reshape(-1, cfg.dim)
+        out = np.empty(err.size)
+        flags = np.array([approach, cfg.n_uavs > 2], np.bool_)
+        reward_rows(
+            log_err.reshape(-1), err.reshape(-1), sep.reshape(-1), a,
+            diverged.reshape(-1), rows, self._rew_at, self._rew_prm, flags, self._dims, out,
+        )  # fmt: skip
+        return out.reshape(lead)
 
     @property
     def reward_range(self) -> tuple[float, float]:

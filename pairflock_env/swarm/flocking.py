@@ -17,11 +17,23 @@ flag for non-finite or runaway states.
 
 Two ways to find the pairs, same results: all pairs (O(N^2) per swarm), or a
 :class:`~pairflock_env.swarm.grid.NeighborGrid` (O(N) per swarm for a flock of bounded
-density). The grid path visits the pairs of each UAV i with j > i in increasing j, exactly as
-the all-pairs loop does, so every floating-point sum is formed in the same order and the two
-paths agree bit for bit. Swarms a grid cannot hold (non-finite coordinates) use all pairs.
+density). Swarms a grid cannot hold (non-finite coordinates) use all pairs.
+
+How the sweep runs: each UAV *gathers* its own command (no UAV writes another's), from a
+candidate list of the UAVs within its reach (all of them, or its one-ring of cells), put in
+increasing index order and copied into contiguous per-axis rows. Squared distances, the
+separation (a minimum taken on the bits of the distances, which order like the values) and
+the collision count run as vectorised loops over that list; the neighbours are read off a
+bitmask in increasing index; their forces are added after the pinning term, in that order.
+That is the order in which the symmetric sweep (f_ij added to i and subtracted from j over
+the pairs i < j in turn) forms each sum, and f_ji = -f_ij bit for bit, so all pairs, the grid
+and the symmetric sweep agree to the last bit (tests/reference_flocking.py keeps that sweep as
+the reference). On the grid, the UAVs of a cell share one candidate list and are taken in
+cell order, with positions, velocities and the union-find forest in the same (slot) order:
+memory follows space, so a flight whose UAV indices are scrambled in space costs what a
+sorted one costs. Kernels are specialised per dimension (``dims``), so 2-D and 3-D unroll.
 The per-pair pass for observations and eq. 28 (``pair_pass``) lives in
-:mod:`pairflock_env.swarm.pair_pass` and is re-exported here.
+:mod:`pairflock_env.swarm.pair_pass`.
 
 This is the only implementation of these equations; every view and vehicle model calls it.
 The kernels run single-threaded under numba (compiled code is cached on disk); the small
@@ -36,15 +48,50 @@ import numpy as np
 
 from pairflock_env.config import PairFlockConfig
 from pairflock_env.config.sections.flocking import repulsion_floor
-from pairflock_env.kernels import KernelParams, jit_inline, jit_kernel
+from pairflock_env.kernels import (
+    BoundKernel,
+    KernelParams,
+    bits_float,
+    float_bits,
+    jit_inline,
+    jit_kernel,
+    low_bit,
+)
 from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
     check_grid,
-    dist2,
     nearest_d2,
     one_ring,
     ring_bound2,
+)
+from pairflock_env.swarm.slots import (
+    ACC,
+    CIDX,
+    CP,
+    CQ,
+    CSLOT,
+    HIST,
+    MD,
+    NB,
+    ORDER,
+    PARENT,
+    POS_OF,
+    PRT,
+    PS,
+    QS,
+    ROW,
+    SIZE,
+    TMP,
+    TMP2,
+    copy_slots,
+    find,
+    gather,
+    join,
+    largest_component,
+    put_slots,
+    row_d2,
+    sort_indices,
 )
 
 __all__ = ["FLOCKING", "FlockScalars", "flocking_params", "flocking_pass"]
@@ -164,179 +211,292 @@ def _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size):
 
 
 @jit_inline
-def _find(parent, x):
-    """Root of x in the union-find forest, halving the path on the way."""
-    while parent[x] != x:
-        parent[x] = parent[parent[x]]
-        x = parent[x]
-    return x
+def _three(dims):
+    """Whether ``dims`` (see :data:`_DIMS`) is a 3-D kernel's."""
+    return len(dims) % 2 == 1
 
 
 @jit_inline
-def _union(parent, size, i, j):
-    """Join the components of i and j, the smaller under the larger (shallow trees)."""
-    x = _find(parent, i)
-    y = _find(parent, j)
-    if x != y:
-        if size[x] > size[y]:
-            x, y = y, x
-        parent[x] = y
-        size[y] += size[x]
+def _floor(dims):
+    """Whether ``dims`` (see :data:`_DIMS`) is a kernel's with the repulsion floor."""
+    return len(dims) > 3
 
 
 @jit_inline
-def _largest_component(parent, size):
-    best = 0
-    for i in range(parent.shape[0]):
-        if parent[i] == i and size[i] > best:
-            best = size[i]
-    return best
-
-
-@jit_inline
-def _pair_force(q, p, prm, b, i, j, d2, acc):
-    """Eqs. 13-18 for the neighbours i < j: symmetric, so f_ij = -f_ji. With the swarm
-    layer's floor (floor_radius2 > 0) the repulsion closer than rho* is at least
-    F* rho* / rho (w multiplies q_j - q_i, of length rho)."""
+def _pair_force(prm, d2, dq0, dq1, dq2, dp0, dp1, dp2, floor):
+    """Eqs. 13-18: the force f_ij of neighbour j on UAV i at squared distance d2, from the
+    offset dq = q_j - q_i and the relative velocity dp = p_j - p_i (three components; the
+    third is zero and unused in 2-D), and its weight w = a - g_r(||q_j - q_i||). Odd in
+    (dq, dp), so f_ji = -f_ij bit for bit. With the swarm layer's floor (floor_radius2 > 0)
+    the repulsion closer than rho* is at least F* rho* / rho (w multiplies q_j - q_i, of
+    length rho)."""
     w = prm.attraction - prm.repulsion * np.exp(-d2 * prm.inv_sigma2)
-    if d2 < prm.floor_radius2 and d2 > 0.0:
+    if floor and d2 < prm.floor_radius2 and d2 > 0.0:
         w = min(w, -prm.floor_gain / d2)
-    for k in range(q.shape[2]):
-        f = w * (q[b, j, k] - q[b, i, k]) + prm.consensus * (p[b, j, k] - p[b, i, k])
-        acc[b, i, k] += f
-        acc[b, j, k] -= f
+    return _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2), w
 
 
 @jit_inline
-def _separation(min_d2, b, i, j, partner_i, d2):
-    """Nearest non-partner distances of i and j, updated with their pair."""
-    if j != partner_i:
-        if d2 < min_d2[b, i]:
-            min_d2[b, i] = d2
-        if d2 < min_d2[b, j]:
-            min_d2[b, j] = d2
+def _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2):
+    """f_ij = w dq + b dp from the weight :func:`_pair_force` gave the pair."""
+    c = prm.consensus
+    return w * dq0 + c * dp0, w * dq1 + c * dp1, w * dq2 + c * dp2
 
 
-@jit_kernel
-def _pass_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size):
-    """Every pair i < j of swarm b; returns the number of collisions."""
-    N = q.shape[1]
+@jit_inline
+def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor):
+    """UAV x (in slot s) against the candidate list (indices in increasing order, every
+    UAV within reach of x among them, x too): x's separation and flocking command, and
+    its edges of the interaction graph; returns the collisions seen from x.
+
+    UAV x gathers its own command: the pinning term, then f_xj of each neighbour j in
+    increasing j. That is the order in which the symmetric sweep of the equations (f_ij
+    added to i and subtracted from j, pairs i < j in order) forms the sum, and f_xj = -f_jx
+    bit for bit: the command is the same to the last bit, and no UAV writes another's.
+    """
+    row, rowu, cidx, nb = fw[ROW], fwu[ROW], iw[CIDX], iw[NB]
+    sx = iw[POS_OF, s]
+    x0, x1, v0, v1 = fw[CQ, sx], fw[CQ + 1, sx], fw[CP, sx], fw[CP + 1, sx]
+    x2 = fw[CQ + 2, sx] if three else 0.0
+    v2 = fw[CP + 2, sx] if three else 0.0
+    row_d2(fw, n, x0, x1, x2, three)
+    row[sx] = np.inf  # itself: no neighbour, no separation, no collision
+    px = iw[PRT, s]
+    inf_bits = float_bits(np.inf)
+    m = inf_bits
     nc = 0
-    for i in range(N):
-        pi = partner[i]
-        for j in range(i + 1, N):
-            d2 = dist2(q, b, i, j)
-            _separation(min_d2, b, i, j, pi, d2)
-            if d2 < prm.collision_distance2:
-                nc += 1
-            if d2 < prm.radius2:
-                _pair_force(q, p, prm, b, i, j, d2, acc)
-                _union(parent, size, i, j)
+    for c in range(n):  # separation (the partner left out) and collisions: vectorised
+        v = rowu[c] if cidx[c] != px else inf_bits
+        m = v if v < m else m
+        nc += row[c] < prm.collision_distance2
+    fw[MD, s] = bits_float(m)
+    k = 0
+    for w in range((n + 63) >> 6):  # the neighbours, in increasing index
+        bits = np.uint64(0)
+        for t in range(64):  # (the row is long enough; what lies past n is left out)
+            c = 64 * w + t
+            bits |= np.uint64(row[c] < prm.radius2 and c < n) << np.uint64(t)
+        while bits != 0:
+            nb[k] = 64 * w + low_bit(bits)
+            bits &= bits - np.uint64(1)
+            k += 1
+    f0, f1, f2 = fw[ACC, s], fw[ACC + 1, s], fw[ACC + 2, s] if three else 0.0
+    for t in range(k):
+        c = nb[t]
+        dq2 = fw[CQ + 2, c] - x2 if three else 0.0
+        dp2 = fw[CP + 2, c] - v2 if three else 0.0
+        dq0, dq1 = fw[CQ, c] - x0, fw[CQ + 1, c] - x1
+        dp0, dp1 = fw[CP, c] - v0, fw[CP + 1, c] - v1
+        g = _pair_force(prm, row[c], dq0, dq1, dq2, dp0, dp1, dp2, floor)[0]
+        f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
+    fw[ACC, s], fw[ACC + 1, s], fw[ACC + 2, s] = f0, f1, f2
+    parent, size = iw[PARENT], iw[SIZE]
+    # the interaction graph (over slots), each edge once: from x to the neighbours of
+    # larger index, which follow x in the candidate list
+    first = 0
+    while first < k and nb[first] < sx:
+        first += 1
+    root = find(parent, s)
+    for t in range(first, k):
+        root = join(parent, size, root, iw[CSLOT, nb[t]])
     return nc
 
 
-@jit_inline
-def _sort_by_index(nb_j, nb_d2, n):
-    """Insertion sort of the first n neighbours by index (the lists are short)."""
-    for t in range(1, n):
-        j, d2 = nb_j[t], nb_d2[t]
-        s = t
-        while s > 0 and nb_j[s - 1] > j:
-            nb_j[s] = nb_j[s - 1]
-            nb_d2[s] = nb_d2[s - 1]
-            s -= 1
-        nb_j[s] = j
-        nb_d2[s] = d2
+@jit_kernel
+def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
+    """Every UAV of swarm b against every other; returns the number of collisions."""
+    three, floor = _three(dims), _floor(dims)
+    N = q.shape[1]
+    for i in range(N):  # slots, and the candidate list, in index order
+        iw[ORDER, i] = iw[CIDX, i] = iw[CSLOT, i] = i
+    copy_slots(q, p, b, iw[ORDER], partner, acc, fw, iw, three)
+    gather(N, fw, iw, three)
+    nc = 0
+    for x in range(N):
+        nc += _gather_uav(x, x, N, prm, fw, fwu, iw, three, floor)
+    put_slots(b, iw[ORDER], acc, min_d2, fw, three)
+    return nc // 2  # each pair was seen from both sides
 
 
 @jit_kernel
-def _pass_grid(q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2):
-    """:func:`_pass_all_pairs` over the grid's one-ring pairs, same order and results."""
+def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
+    """:func:`_sweep_all_pairs` with each pair met once: UAV x against the UAVs after it
+    (distances, both separations, collisions, weights), the weight of each of its neighbours
+    after it kept in ``wm[x, j]`` and x marked in that neighbour's bits ``lb[j]``, so that
+    x finds its neighbours before it, in order, with their weights. The same sums in the
+    same order; half the distances and exponentials. Needs ``wm`` of N x N."""
+    three, floor = _three(dims), _floor(dims)
     N = q.shape[1]
+    for i in range(N):  # positions and velocities by axis, in index order
+        for k in range(3 if three else 2):
+            fw[QS + k, i] = q[b, i, k]
+            fw[PS + k, i] = p[b, i, k]
+        for w in range(lb.shape[1]):
+            lb[i, w] = 0
+    row, parent, size = fw[ROW], iw[PARENT], iw[SIZE]
+    cq0, cq1, cp0, cp1 = fw[QS], fw[QS + 1], fw[PS], fw[PS + 1]
+    cq2, cp2 = fw[QS + 2], fw[PS + 2]
+    inf_bits = float_bits(np.inf)
+    one = np.uint64(1)
     nc = 0
-    for i in range(N):
-        pi = partner[i]
-        n_bk = one_ring(q, b, i, g, g.buckets)
+    for x in range(N):
+        x0, x1, v0, v1 = cq0[x], cq1[x], cp0[x], cp1[x]
+        x2 = cq2[x] if three else 0.0
+        v2 = cp2[x] if three else 0.0
+        # the UAVs after x (loops over views from 0: numba vectorises those)
+        lo = x + 1
+        r, md = row[lo:N], min_d2[b, lo:N]
+        a0, a1, a2 = cq0[lo:N], cq1[lo:N], cq2[lo:N]
+        skip = partner[x] - lo  # x's partner: no separation between the two
+        m = float_bits(min_d2[b, x])
+        near = 0
+        for t in range(r.shape[0]):  # distances, both separations, collisions
+            a, e = a0[t] - x0, a1[t] - x1
+            d2 = a * a + e * e  # summed over axes in order, as grid.dist2
+            if three:
+                z = a2[t] - x2
+                d2 += z * z
+            r[t] = d2
+            other = t != skip
+            v = float_bits(d2) if other else inf_bits
+            m = v if v < m else m
+            nc += d2 < prm.collision_distance2
+            near += d2 < prm.radius2
+            mj = md[t]
+            md[t] = d2 if (d2 < mj) & other else mj
+        min_d2[b, x] = bits_float(m)
+        f0, f1, f2 = acc[b, x, 0], acc[b, x, 1], acc[b, x, 2] if three else 0.0
+        for w in range((x >> 6) + 1):  # the neighbours before x, in increasing index
+            bits = lb[x, w]
+            while bits != 0:
+                j = 64 * w + low_bit(bits)
+                bits &= bits - one
+                dq2 = cq2[j] - x2 if three else 0.0
+                dp2 = cp2[j] - v2 if three else 0.0
+                g = _weighted_force(
+                    prm, wm[j, x], cq0[j] - x0, cq1[j] - x1, dq2, cp0[j] - v0, cp1[j] - v1, dp2
+                )
+                f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
+        root = find(parent, x)
+        bit_x = one << np.uint64(x & 63)
+        for w in range(lo >> 6, (N + 63) >> 6 if near else 0):  # neighbours after x, in order
+            bits = np.uint64(0)
+            rw, first = row[64 * w : min(64 * w + 64, N)], lo - 64 * w
+            for t in range(rw.shape[0]):
+                hit = (rw[t] < prm.radius2) & (t >= first)
+                bits |= np.uint64(hit) << np.uint64(t)
+            while bits != 0:
+                j = 64 * w + low_bit(bits)
+                bits &= bits - one
+                dq2 = cq2[j] - x2 if three else 0.0
+                dp2 = cp2[j] - v2 if three else 0.0
+                g, wm[x, j] = _pair_force(
+                    prm, row[j], cq0[j] - x0, cq1[j] - x1, dq2, cp0[j] - v0, cp1[j] - v1, dp2, floor
+                )
+                lb[j, x >> 6] |= bit_x
+                f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
+                root = join(parent, size, root, j)
+        acc[b, x, 0], acc[b, x, 1] = f0, f1
+        if three:
+            acc[b, x, 2] = f2
+    return nc
+
+
+@jit_kernel
+def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
+    """:func:`_sweep_all_pairs` on the grid, cell by cell: the UAVs of a cell share one
+    candidate list (its one-ring, put in index order once), and UAVs, candidates and the
+    union-find forest are all held in slot (cell) order, so that memory follows space
+    whatever the indices. The same results."""
+    three, floor = _three(dims), _floor(dims)
+    N = q.shape[1]
+    order = g.order[b]
+    copy_slots(q, p, b, order, partner, acc, fw, iw, three)
+    cidx, cslot = iw[CIDX], iw[CSLOT]
+    nc = 0
+    s = 0
+    padded = g.n_ring[b] > 0
+    bucket = -1
+    while s < N:  # slots s..end-1: the UAVs of one bucket (one UAV when folded)
+        if padded:  # the next occupied bucket, and its one-ring
+            bucket += 1
+            while g.start[b, bucket + 1] == s:
+                bucket += 1
+            end = g.start[b, bucket + 1]
+            n_bk = g.n_ring[b]
+            for t in range(n_bk):
+                g.buckets[t] = bucket + g.ring[b, t]
+        else:
+            end = s + 1
+            n_bk = one_ring(q, b, order[s], g, g.buckets)
         n = 0
         for t in range(n_bk):
             bk = g.buckets[t]
-            end = g.start[b, bk + 1]
-            s0 = end  # bucket lists increase: the UAVs after i are a tail
-            while s0 > g.start[b, bk] and g.order[b, s0 - 1] > i:
-                s0 -= 1
-            for s in range(s0, end):
-                j = g.order[b, s]
-                d2 = dist2(q, b, i, j)
-                _separation(min_d2, b, i, j, pi, d2)
-                if d2 < prm.collision_distance2:
-                    nc += 1
-                if d2 < prm.radius2:
-                    _union(parent, size, i, j)
-                    nb_j[n] = j
-                    nb_d2[n] = d2
-                    n += 1
-        _sort_by_index(nb_j, nb_d2, n)
-        for t in range(n):
-            _pair_force(q, p, prm, b, i, nb_j[t], nb_d2[t], acc)
+            for s2 in range(g.start[b, bk], g.start[b, bk + 1]):
+                cidx[n], cslot[n] = order[s2], s2
+                n += 1
+        sort_indices(cidx, cslot, n, iw[TMP], iw[TMP2], iw[HIST], N)
+        gather(n, fw, iw, three)
+        for s2 in range(s, end):
+            nc += _gather_uav(s2, order[s2], n, prm, fw, fwu, iw, three, floor)
+        s = end
+    put_slots(b, order, acc, min_d2, fw, three)
     # the one-ring proves separations shorter than a cell; the others need a wider search
     bound = ring_bound2(g, 1)
     for i in range(N):
         if not min_d2[b, i] < bound:
             min_d2[b, i] = nearest_d2(q, b, i, partner[i], g, min_d2[b, i], 1)
-    return nc
+    return nc // 2
 
 
 @jit_kernel
-def _flock_swarms(q, p, ql, pl, h, partner, prm, out, work, g):
-    """Every swarm: grid pass where ``g`` holds the swarm, all pairs otherwise."""
+def _flock_swarms(q, p, ql, pl, h, partner, prm, out, fw, fwu, iw, wm, lb, g, dims):
+    """Every swarm: grid pass where ``g`` holds the swarm, all pairs otherwise. ``dims``:
+    a tuple of ``dim`` entries, so that each dimension compiles its own kernels."""
     acc, min_d2, n_coll, lcc, bad, vmis, vmax = out
-    parent, size, nb_j, nb_d2 = work
+    parent, size = iw[PARENT], iw[SIZE]
     n_unpaired = _count_unpaired(partner)
     for b in range(q.shape[0]):
         _velocity_mismatch(p, pl, partner, n_unpaired, b, vmis, vmax)
         bad[b] = _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size)
         if g is not None and g.ok[b]:
-            n_coll[b] = _pass_grid(q, p, partner, prm, b, g, acc, min_d2, parent, size, nb_j, nb_d2)
+            args = (acc, min_d2, fw, fwu, iw, dims)
+            n_coll[b] = _sweep_grid(q, p, partner, prm, b, g, *args)
+        elif wm.shape[0] >= q.shape[1]:
+            args = (acc, min_d2, fw, fwu, iw, wm, lb, dims)
+            n_coll[b] = _sweep_pairs(q, p, partner, prm, b, *args)
         else:
-            n_coll[b] = _pass_all_pairs(q, p, partner, prm, b, acc, min_d2, parent, size)
-        lcc[b] = _largest_component(parent, size)
+            n_coll[b] = _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims)
+        lcc[b] = largest_component(parent[: q.shape[1]], size)
 
 
 # The entry points take arrays one by one: the dispatcher types plain arrays fastest, which
 # matters for small swarms, where a pass takes a few microseconds.
 @jit_kernel
-def _flocking_kernel(
-    q, p, ql, pl, h, partner, prm, acc, min_d2, ncol, lcc, bad, vmis, vmax, parent, size, nbj, nbd
-):
-    out = (acc, min_d2, ncol, lcc, bad, vmis, vmax)
-    _flock_swarms(q, p, ql, pl, h, partner, _scalars(prm), out, (parent, size, nbj, nbd), None)
+def _flocking_kernel(q, p, ql, pl, h, prt, prm, dims, acc, md2, nc, lcc, bad, vm, vx, *work):
+    out = (acc, md2, nc, lcc, bad, vm, vx)
+    _flock_swarms(q, p, ql, pl, h, prt, _scalars(prm), out, *work, None, dims)
 
 
 @jit_kernel
 def _flocking_grid_kernel(
-    q,
-    p,
-    ql,
-    pl,
-    h,
-    partner,
-    prm,
-    acc,
-    min_d2,
-    ncol,
-    lcc,
-    bad,
-    vmis,
-    vmax,
-    parent,
-    size,
-    nbj,
-    nbd,
-    *grid,
+    q, p, ql, pl, h, prt, prm, dims, acc, md2, nc, lcc, bad, vm, vx, fw, fu, iw, wm, lb, *grid
 ):
-    out = (acc, min_d2, ncol, lcc, bad, vmis, vmax)
-    work = (parent, size, nbj, nbd)
-    _flock_swarms(q, p, ql, pl, h, partner, _scalars(prm), out, work, GridArrays(*grid))
+    out = (acc, md2, nc, lcc, bad, vm, vx)
+    g = GridArrays(*grid)
+    _flock_swarms(q, p, ql, pl, h, prt, _scalars(prm), out, fw, fu, iw, wm, lb, g, dims)
+
+
+#: the outputs of a pass, in the kernels' order
+_FLOCK_KEYS = ("acc", "min_d2", "collisions", "largest_component", "diverged")
+_FLOCK_KEYS += ("velocity_mismatch", "velocity_mismatch_max", "_fw", "_fwu", "_iw", "_wm", "_lb")
+#: all pairs meet each pair once (:func:`_sweep_pairs`) up to this many UAVs, whose N x N
+#: weights take 2 MB; beyond, each UAV meets the others in turn (:func:`_sweep_all_pairs`)
+_PAIRS_MAX = 512
+#: the ``dims`` argument of the kernels: its length is the dimension (2 or 3), plus 2 with the
+#: swarm layer's repulsion floor, so that each combination compiles its own kernels (the
+#: floor's test leaves the pair loops of the paper's law)
+_DIMS = {(2, False): (0, 0), (3, False): (0, 0, 0), (2, True): (0,) * 4, (3, True): (0,) * 5}
 
 
 def flocking_pass(
@@ -370,14 +530,27 @@ def flocking_pass(
         and max of ||p_i - p_leader|| over the unpaired UAVs (all UAVs when every UAV is
         paired). Per-swarm sums run sequentially, so results do not depend on B.
     """
-    B, N, D = q.shape
+    return flocking_runner(params, q.shape, grid, out)(q, p, leader_q, leader_p, pinned, partner)
+
+
+def flocking_runner(
+    params: np.ndarray,
+    shape: tuple[int, int, int],
+    grid: NeighborGrid | None = None,
+    out: dict[str, np.ndarray] | None = None,
+):
+    """:func:`flocking_pass` for repeated calls on arrays of ``shape`` (B, N, dim): the grid
+    checked and the outputs allocated (or ``out`` reused) once. Returns
+    ``run(q, p, leader_q, leader_p, pinned, partner) -> out`` (the same dict every call)."""
+    B, N, D = shape
     check_grid(
         grid,
-        q.shape,
+        tuple(shape),
         max(params[_F.radius2], params[_F.collision_distance2]),
         "max(radius, collision_distance)",
     )
-    if out is None or out["acc"].shape != q.shape:
+    if out is None or out["acc"].shape != tuple(shape):
+        words = (N + 63) // 64
         out = {
             "acc": np.empty((B, N, D)),
             "min_d2": np.empty((B, N)),
@@ -386,33 +559,15 @@ def flocking_pass(
             "diverged": np.empty(B, np.bool_),
             "velocity_mismatch": np.empty(B),
             "velocity_mismatch_max": np.empty(B),
-            "_parent": np.empty(N, np.int64),
-            "_size": np.empty(N, np.int64),
-            "_nb_j": np.empty(N, np.int64),
-            "_nb_d2": np.empty(N),
+            # scratch: see pairflock_env.swarm.slots
+            "_fw": np.zeros((MD + 1, 64 * words)),
+            "_iw": np.zeros((HIST + 1, max(64 * words, 256)), np.int64),  # HIST: the last
         }
-    args = (
-        q,
-        p,
-        leader_q,
-        leader_p,
-        pinned,
-        partner,
-        params,
-        out["acc"],
-        out["min_d2"],
-        out["collisions"],
-        out["largest_component"],
-        out["diverged"],
-        out["velocity_mismatch"],
-        out["velocity_mismatch_max"],
-        out["_parent"],
-        out["_size"],
-        out["_nb_j"],
-        out["_nb_d2"],
-    )
+        out["_fwu"] = out["_fw"].view(np.uint64)
+        n_wm = N if grid is None and N <= _PAIRS_MAX else 0  # (the grid's fallback: rows)
+        out["_wm"] = np.zeros((n_wm, n_wm))
+        out["_lb"] = np.zeros((n_wm, words), np.uint64)
+    tail = (params, _DIMS[D, bool(params[_F.floor_radius2] > 0)], *(out[k] for k in _FLOCK_KEYS))
     if grid is None:
-        _flocking_kernel(*args)
-    else:
-        _flocking_grid_kernel(*args, *grid.arrays)
-    return out
+        return BoundKernel(_flocking_kernel, tail, out)
+    return BoundKernel(_flocking_grid_kernel, (*tail, *grid.arrays), out)

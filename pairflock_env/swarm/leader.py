@@ -47,10 +47,10 @@ class ConstantVelocityLeader:
         self.dim = self.q0.shape[0]
 
     def state(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        t = np.asarray(t, dtype=np.float64)[:, None]
-        q = self.q0 + t * self.v
-        p = np.broadcast_to(self.v, q.shape).copy()
-        return q, p
+        if type(t) is not np.ndarray or t.dtype != np.float64:
+            t = np.asarray(t, dtype=np.float64)
+        q = self.q0 + t[:, None] * self.v
+        return q, self.v[None].repeat(t.shape[0], axis=0)
 
 
 # Gauss-Legendre nodes and weights on [0, 1] for the position integral inside a turn; the

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pairflock_env.kernels import jit_inline, jit_kernel
+from pairflock_env.kernels import BoundKernel, jit_inline, jit_kernel
 from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
@@ -124,10 +124,25 @@ def pair_pass(
         nearest non-partner UAVs (nearest first, ties to the lower index, zero-padded) and
         ``nbr_mask`` (B, M, K).
     """
-    B, _N, D = q.shape
+    run = pair_runner(q.shape, agents, partners, radius, n_neighbors, grid, out)
+    return run(q, p)
+
+
+def pair_runner(
+    shape: tuple[int, int, int],
+    agents: np.ndarray,
+    partners: np.ndarray,
+    radius: float,
+    n_neighbors: int,
+    grid: NeighborGrid | None = None,
+    out: dict[str, np.ndarray] | None = None,
+):
+    """:func:`pair_pass` for repeated calls on arrays of ``shape`` (B, N, dim) with the same
+    agents: checked and allocated once. Returns ``run(q, p) -> out`` (the same dict)."""
+    B, _N, D = shape
     M = agents.shape[0]
     K = n_neighbors
-    check_grid(grid, q.shape, radius**2, "radius")
+    check_grid(grid, tuple(shape), radius**2, "radius")
     if out is None or out["nbr_pos"].shape != (B, M, K, D):
         out = {
             "shared": np.empty((B, M // 2)),
@@ -137,21 +152,8 @@ def pair_pass(
             "_best_d2": np.empty(max(K, 1)),
             "_best_j": np.empty(max(K, 1), np.int64),
         }
-    args = (
-        q,
-        p,
-        agents,
-        partners,
-        radius**2,
-        out["shared"],
-        out["nbr_pos"],
-        out["nbr_vel"],
-        out["nbr_mask"],
-        out["_best_d2"],
-        out["_best_j"],
-    )
+    keys = ("shared", "nbr_pos", "nbr_vel", "nbr_mask", "_best_d2", "_best_j")
+    tail = (agents, partners, radius**2, *(out[k] for k in keys))
     if grid is None:
-        _pair_kernel(*args)
-    else:
-        _pair_grid_kernel(*args, *grid.arrays)
-    return out
+        return BoundKernel(_pair_kernel, tail, out)
+    return BoundKernel(_pair_grid_kernel, (*tail, *grid.arrays), out)

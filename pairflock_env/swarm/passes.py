@@ -20,11 +20,9 @@ from __future__ import annotations
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig
-from pairflock_env.swarm.flocking import flocking_params, flocking_pass
+from pairflock_env.swarm.flocking import flocking_params, flocking_runner
 from pairflock_env.swarm.grid import NeighborGrid
-from pairflock_env.swarm.pair_pass import pair_pass
-from pairflock_env.task.pairing import agent_pair_state
-from pairflock_env.task.spaces import separation_bound
+from pairflock_env.swarm.pair_pass import pair_runner
 
 __all__ = ["NeighborPass", "make_grid"]
 
@@ -61,7 +59,12 @@ class NeighborPass:
         self.agent_dm = cfg.d_m_array[self.agent_pair]
         self.partner_of = np.full(cfg.n_uavs, -1, np.int64)
         self.partner_of[self.agent_uavs] = self.partner_uavs
-        self.grid = make_grid(cfg, num_swarms)
+        self.grid = g = make_grid(cfg, num_swarms)
+        shape = (num_swarms, cfg.n_uavs, cfg.dim)
+        self._flock = flocking_runner(self.params, shape, g)
+        self._pairs = pair_runner(
+            shape, self.agent_uavs, self.partner_uavs, cfg.radius, cfg.obs_neighbors, g
+        )
         self.flock_out: dict[str, np.ndarray] | None = None
         self.pair_out: dict[str, np.ndarray] | None = None
 
@@ -77,32 +80,14 @@ class NeighborPass:
         ``leader_q``, ``leader_p``.
 
         Returns the flocking outputs (:func:`~pairflock_env.swarm.flocking.flocking_pass`)
-        and the agents' pair quantities (B, M): those of
-        :func:`~pairflock_env.task.pairing.agent_pair_state`, plus ``min_separation``
-        (distance to the nearest non-partner UAV, m; with no other UAV, n_uavs = 2, the
-        largest finite separation :func:`~pairflock_env.task.spaces.separation_bound`, so
-        infos stay finite) and ``shared_neighbors`` (eq. 28). The observation's neighbour
-        slots are in :attr:`pair_out`. The flocking outputs gain ``swarm_min_separation``
-        (B,): the smallest distance between any two UAVs, partners included (m).
+        and the pair pass's (:func:`~pairflock_env.swarm.pair_pass.pair_pass`: eq. 28's
+        shared count per pair and each agent's K nearest), also kept as :attr:`flock_out`
+        and :attr:`pair_out`; the agents' pass (:mod:`pairflock_env.task.agent_pass`) turns
+        them into what a step reports, and adds ``swarm_min_separation`` (B,) to the flocking
+        outputs: the smallest distance between any two UAVs, partners included (m).
         """
-        cfg, g = self.cfg, self.grid
-        ia, ip = self.agent_uavs, self.partner_uavs
-        if g is not None:
-            g.build(q)
-        fl = self.flock_out = flocking_pass(
-            self.params, q, p, leader_q, leader_p, pinned, self.partner_of, self.flock_out, g
-        )
-        pp = self.pair_out = pair_pass(
-            q, p, ia, ip, cfg.radius, cfg.obs_neighbors, out=self.pair_out, grid=g
-        )
-        pair = agent_pair_state(q, p, ia, ip, self.agent_dm, cfg.surface_slope)
-        pair["min_separation"] = sep = np.sqrt(fl["min_d2"][:, ia])
-        if cfg.n_uavs == 2:  # no non-partner UAV at all: the largest finite separation
-            sep[:] = separation_bound(cfg)
-        pair["shared_neighbors"] = pp["shared"][:, self.agent_pair]
-        # the closest two UAVs: min_d2 leaves each UAV's partner out, the pair distance adds it
-        closest = np.sqrt(fl["min_d2"].min(axis=1))
-        if len(ia):
-            np.minimum(closest, pair["pair_distance"].min(axis=1), out=closest)
-        fl["swarm_min_separation"] = closest
-        return fl, pair
+        if self.grid is not None:
+            self.grid.build(q)
+        self.flock_out = fl = self._flock(q, p, leader_q, leader_p, pinned, self.partner_of)
+        self.pair_out = pp = self._pairs(q, p)
+        return fl, pp

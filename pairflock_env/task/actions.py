@@ -16,8 +16,9 @@ from typing import Any
 import numpy as np
 
 from pairflock_env.config.arrays import real_array
+from pairflock_env.kernels import jit_kernel
 
-__all__ = ["check_pair_actions", "decode_pair_actions"]
+__all__ = ["add_pair_command", "check_pair_actions", "decode_pair_actions"]
 
 
 def check_pair_actions(
@@ -44,6 +45,18 @@ def check_pair_actions(
     return a
 
 
+@jit_kernel
+def _decode_kernel(actions, limit, u, clipped):
+    for b in range(actions.shape[0]):
+        for m in range(actions.shape[1]):
+            out = False
+            for k in range(actions.shape[2]):
+                a = actions[b, m, k]
+                out |= abs(a) > 1.0
+                u[b, m, k] = min(max(a, -1.0), 1.0) * limit
+            clipped[b, m] = out
+
+
 def decode_pair_actions(actions: np.ndarray, accel_limit: float) -> tuple[np.ndarray, np.ndarray]:
     """Decode checked actions (B, M, dim) into the pair command.
 
@@ -52,6 +65,26 @@ def decode_pair_actions(actions: np.ndarray, accel_limit: float) -> tuple[np.nda
         (m/s^2); ``clipped`` (B, M) bool: some component of that agent's action was outside
         [-1, 1].
     """
-    clipped = (np.abs(actions) > 1.0).any(axis=-1)
-    u = actions.clip(-1.0, 1.0) * accel_limit
+    u = np.empty(actions.shape)
+    clipped = np.empty(actions.shape[:2], np.bool_)
+    _decode_kernel(actions, float(accel_limit), u, clipped)
     return u, clipped
+
+
+@jit_kernel
+def _add_kernel(acc, agents, u, out):
+    for b in range(acc.shape[0]):
+        for i in range(acc.shape[1]):
+            for k in range(acc.shape[2]):
+                out[b, i, k] = acc[b, i, k]
+        for m in range(agents.shape[0]):
+            for k in range(acc.shape[2]):
+                out[b, agents[m], k] += u[b, m, k]
+
+
+def add_pair_command(acc: np.ndarray, agent_uavs: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """``acc`` (B, N, dim) with the pair command ``u`` (B, M, dim) added on the agents' rows
+    ``agent_uavs`` (M,), as a new array: the flocking command plus f^x (eq. 11)."""
+    out = np.empty(acc.shape)
+    _add_kernel(acc, agent_uavs, u, out)
+    return out

@@ -104,6 +104,7 @@ def make_info(
     diverged: np.ndarray,
     terms: Mapping[str, np.ndarray],
     safety: Mapping[str, np.ndarray],
+    pair_accel: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """The core's infos of one step (fresh arrays; see the module docstring).
 
@@ -114,9 +115,12 @@ def make_info(
         sim_time: (B,) s (copied); diverged: (B,) bool; terms: reward terms (B, M).
         safety: the safety stage's infos (``SAFETY_INFO_KEYS`` (B, M), optionally
             ``SAFETY_SWARM_INFO_KEYS`` (B,), and any of its own).
+        pair_accel: ||u|| (B, M) when already computed (the core's agents' pass has it).
     """
     info = {k: pair[k] for k in PAIR_INFO_KEYS}
-    info["pair_accel"] = np.sqrt(np.einsum("bmk,bmk->bm", u, u))
+    info["pair_accel"] = (
+        np.sqrt(np.einsum("bmk,bmk->bm", u, u)) if pair_accel is None else pair_accel
+    )
     info["action_clipped"] = clipped
     info.update((k, v) for k, v in safety.items() if k not in SAFETY_SWARM_INFO_KEYS)
     info["sim_time"] = sim_time.copy()

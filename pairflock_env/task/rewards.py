@@ -23,13 +23,17 @@ from collections.abc import Mapping
 import numpy as np
 
 from pairflock_env.config import PairFlockConfig
-from pairflock_env.task.pairing import dot
+from pairflock_env.kernels import KernelParams, jit_inline, jit_kernel
+from pairflock_env.task.pairing import dot_axes
 
 __all__ = [
     "DIVERGENCE_PENALTY",
+    "REWARD",
     "REWARD_TERMS",
+    "agent_reward",
     "episode_end",
     "may_overflow",
+    "reward_params",
     "reward_terms",
     "total_reward",
 ]
@@ -38,22 +42,81 @@ REWARD_TERMS = ("error", "effort", "separation", "collision")
 DIVERGENCE_PENALTY = 100.0
 
 
+#: the reward's parameters, as the kernels receive them
+REWARD = KernelParams(
+    "Reward",
+    (
+        "pair_accel_limit2",
+        "error_weight",
+        "effort_weight",
+        "separation_weight",
+        "collision_weight",
+        "separation_distance",
+        "collision_distance",
+    ),
+)
+_R = REWARD.index
+
+
+def reward_params(cfg: PairFlockConfig) -> np.ndarray:
+    """The reward's parameter vector (:data:`REWARD`) of a config."""
+    return REWARD.pack(
+        pair_accel_limit2=cfg.pair_accel_limit**2,
+        error_weight=cfg.reward_error_weight,
+        effort_weight=cfg.reward_effort_weight,
+        separation_weight=cfg.reward_separation_weight,
+        collision_weight=cfg.reward_collision_weight,
+        separation_distance=cfg.reward_separation_distance,
+        collision_distance=cfg.collision_distance,
+    )
+
+
+@jit_inline
+def agent_reward(prm, pair_error, uu, min_separation):
+    """The weighted terms of one agent (error, effort, separation, collision; each <= 0) and
+    their sum, from its pair error (m), u.u of its pair command ((m/s^2)^2) and its
+    separation (m): the equations of the module docstring, the only place they are written.
+    A term's weight is negated before it multiplies (``-w * x``), a collision counts as 1.0
+    or 0.0, and the terms add in the order of ``REWARD_TERMS``."""
+    sep = prm[_R.separation_distance]
+    short = sep - min_separation
+    short = (0.0 if short <= 0.0 else short) / sep  # np.maximum(0, x): NaN stays NaN
+    collision = 1.0 if min_separation < prm[_R.collision_distance] else 0.0
+    error = -prm[_R.error_weight] * abs(pair_error)
+    effort = -prm[_R.effort_weight] * (uu / prm[_R.pair_accel_limit2])
+    separation = -prm[_R.separation_weight] * short
+    collision = -prm[_R.collision_weight] * collision
+    return error, effort, separation, collision, error + effort + separation + collision
+
+
+@jit_kernel
+def _reward_kernel(prm, pair_error, u, min_separation, dims, out):
+    three = len(dims) == 3
+    for b in range(u.shape[0]):
+        for m in range(u.shape[1]):
+            v = u[b, m]
+            v2 = v[2] if three else 0.0
+            uu = dot_axes(v[0], v[1], v2, v[0], v[1], v2, three)
+            terms = agent_reward(prm, pair_error[b, m], uu, min_separation[b, m])
+            for k in range(5):
+                out[k, b, m] = terms[k]
+
+
 def reward_terms(
     cfg: PairFlockConfig,
     pair_error: np.ndarray,
     u: np.ndarray,
     min_separation: np.ndarray,
 ) -> dict[str, np.ndarray]:
-    """The weighted penalty terms (each <= 0), shapes (B, M); their sum is the reward."""
-    effort = dot(u, u) / cfg.pair_accel_limit**2
-    sep = cfg.reward_separation_distance
-    short = np.maximum(0.0, sep - min_separation) / sep
-    return {
-        "error": -cfg.reward_error_weight * np.abs(pair_error),
-        "effort": -cfg.reward_effort_weight * effort,
-        "separation": -cfg.reward_separation_weight * short,
-        "collision": -cfg.reward_collision_weight * (min_separation < cfg.collision_distance),
-    }
+    """The weighted penalty terms (each <= 0), shapes (B, M); their sum is the reward
+    (:func:`agent_reward` per agent)."""
+    u = np.asarray(u, dtype=np.float64)
+    B, M, D = u.shape
+    err = np.broadcast_to(np.asarray(pair_error, dtype=np.float64), (B, M))
+    sep = np.broadcast_to(np.asarray(min_separation, dtype=np.float64), (B, M))
+    out = np.empty((5, B, M))
+    _reward_kernel(reward_params(cfg), err, u, sep, (0,) * D, out)
+    return dict(zip(REWARD_TERMS, out[:4], strict=True))
 
 
 def total_reward(terms: Mapping[str, np.ndarray]) -> np.ndarray:
