@@ -16,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from baselines.evaluation.rollout import rollout, trace_metrics
+from baselines.evaluation.recording import RecordOptions, recorded_rollout
+from baselines.evaluation.rollout import trace_metrics
 from baselines.evaluation.specs import PolicySpec
 from baselines.runtime import optional
 from baselines.runtime.pool import imap_unordered
@@ -31,7 +32,8 @@ BACKENDS = ("local", "ray")
 @dataclasses.dataclass(frozen=True)
 class Job:
     """One (scenario, policy) over ``seeds``; ``record_seed`` (if any) keeps its trajectory
-    every ``record_stride`` control steps for figures and video."""
+    every ``record_stride`` control steps for figures and video; ``recording`` (if any)
+    writes the run's recordings (:mod:`baselines.evaluation.recording`)."""
 
     scenario: int
     policy: int
@@ -41,6 +43,7 @@ class Job:
     record_seed: int | None = None
     record_stride: int = 1
     metric_kwargs: tuple[tuple[str, Any], ...] = ()
+    recording: RecordOptions | None = None
 
     @property
     def cost(self) -> float:
@@ -58,9 +61,11 @@ def make_jobs(
     record: Callable[[int, int], bool] = lambda i, j: False,
     record_stride: Callable[[PairFlockConfig], int] = lambda cfg: 1,
     metric_kwargs: dict[str, Any] | None = None,
+    recording: Callable[[int, int], RecordOptions | None] = lambda i, j: None,
 ) -> list[Job]:
     """Every (scenario i, policy j) x seed block; the first seed is recorded where
-    ``record(i, j)``. Every policy gets the same seeds, hence the same initial states."""
+    ``record(i, j)``, the recordings written as ``recording(i, j)`` says. Every policy gets
+    the same seeds, hence the same initial states."""
     seeds = tuple(int(s) for s in seeds)
     bs = len(seeds) if batch_size is None else int(batch_size)
     if bs < 1:
@@ -72,7 +77,9 @@ def make_jobs(
             for start in range(0, len(seeds), bs):
                 block = seeds[start : start + bs]
                 rec = seeds[0] if (start == 0 and record(i, j)) else None
-                jobs.append(Job(i, j, cfg, spec, block, rec, record_stride(cfg), mk))
+                jobs.append(
+                    Job(i, j, cfg, spec, block, rec, record_stride(cfg), mk, recording(i, j))
+                )
     return jobs
 
 
@@ -85,7 +92,7 @@ def run_job(job: Job) -> dict[str, Any]:
     cpu0, wall0 = time.process_time(), time.perf_counter()
     policy = job.spec.build(job.config)
     rec_rows = () if job.record_seed is None else (job.seeds.index(job.record_seed),)
-    tr = rollout(job.config, policy, job.seeds, record_rows=rec_rows)
+    tr = recorded_rollout(job.recording, job.config, policy, job.seeds, record_rows=rec_rows)
     out: dict[str, Any] = {
         "scenario": job.scenario,
         "policy": job.policy,

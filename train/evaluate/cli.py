@@ -30,7 +30,17 @@ from tqdm import tqdm
 from baselines import POLICIES, make_pair_policy
 from baselines.controllers.sb3 import read_metadata
 from baselines.controllers.zoo import resolve_model
-from baselines.evaluation.rollout import rollout, trace_metrics
+from baselines.evaluation.recording import (
+    RecordOptions,
+    add_record_options,
+    check_run_names,
+    record_options,
+    recorded_rollout,
+    report_line,
+    run_name,
+    written,
+)
+from baselines.evaluation.rollout import trace_metrics
 from baselines.evaluation.specs import parse_assignment, parse_policy
 from baselines.reporting.criteria import (
     GENERALIST,
@@ -80,9 +90,16 @@ def split_limit(policy: str) -> tuple[str, str | None]:
 
 
 def run_job(
-    model_path: str, policy: str, n_uavs: int, init: str, seeds: list[int], extra: dict[str, Any]
+    model_path: str,
+    policy: str,
+    n_uavs: int,
+    init: str,
+    seeds: list[int],
+    extra: dict[str, Any],
+    recording: RecordOptions | None = None,
 ) -> list[dict[str, Any]]:
-    """Metrics per seed of one (policy, N, init) combination."""
+    """Metrics per seed of one (policy, N, init) combination; ``recording`` writes its
+    recordings (:mod:`baselines.evaluation.recording`)."""
     pin_threads()
 
     preset, over = _task_overrides(Path(model_path))
@@ -97,7 +114,7 @@ def run_job(
         spec = parse_policy(name)
         pol = make_pair_policy(spec.name, cfg, **dict(spec.gains))
     t0 = time.perf_counter()
-    rows = trace_metrics(rollout(cfg, pol, seeds))
+    rows = trace_metrics(recorded_rollout(recording, cfg, pol, seeds))
     wall = time.perf_counter() - t0
     return [
         {
@@ -185,6 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_check_options(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_record_options(p)
     return p
 
 
@@ -255,9 +273,30 @@ def _check_baseline(b: str) -> None:
         raise ValueError(f"--baselines {b!r} is invalid: {e}") from None
 
 
-def _run(args, policies: list[str], seeds: list[int], extra) -> list[dict[str, Any]]:
+def _recordings(args, record: RecordOptions | None, policies: list[str]) -> dict[tuple, Any]:
+    """The recording options of every (N, init, policy) run (None without --record);
+    ``ValueError`` when two runs would share a folder."""
+    runs = [(n, init, pol) for n in args.n_uavs for init in args.init for pol in policies]
+    if record is None:
+        return dict.fromkeys(runs)
+    recordings = {
+        (n, init, pol): record.run(
+            run_name(f"n{n}", init, pol),
+            f"sb3:{args.model.stem}" if pol == "learned" else pol,
+            n_uavs=n,
+            init=init,
+            policy=pol,
+            model=str(args.model),
+        )
+        for n, init, pol in runs
+    }
+    check_run_names(recordings.values())
+    return recordings
+
+
+def _run(args, policies: list[str], seeds: list[int], extra, recordings) -> list[dict[str, Any]]:
     jobs = [
-        (str(args.model), pol, n, init, seeds, extra)
+        (str(args.model), pol, n, init, seeds, extra, recordings[n, init, pol])
         for n in sorted(args.n_uavs, reverse=True)
         for init in args.init
         for pol in policies
@@ -301,10 +340,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     out = args.out or Path("results") / f"eval_{args.model.stem}"
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     policies = ["learned", *args.baselines]
+    with user_errors(parser):
+        recordings = _recordings(args, record_options(args, out, seeds), policies)
     t0 = time.perf_counter()
-    rows = _run(args, policies, seeds, extra)
+    rows = _run(args, policies, seeds, extra, recordings)
     table = summary_table(rows, policies)
     checks = _checks(rows, args.targets)
+    recorded = written(recordings.values(), seeds, out)
     with result_folder(out) as folder:  # complete and consistent, or marked INCOMPLETE
         write_csv(folder / "results.csv", rows)
         atomic_write_text(
@@ -319,10 +361,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             extra_overrides=extra,
             wall_s=round(time.perf_counter() - t0, 1),
             outputs=["results.csv", "summary.md"],
+            recordings=recorded,
         )
         write_json(folder / "run.json", record)
     print(table)
     for line in criteria_lines(checks):
         print(line)
     print(f"wrote {out / 'summary.md'}")
+    if recorded:
+        print(report_line(recorded, out))
     return 1 if args.check and not all_passed(checks) else 0

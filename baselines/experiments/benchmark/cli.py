@@ -14,6 +14,13 @@ from pathlib import Path
 from typing import Any
 
 from baselines.evaluation.jobs import BACKENDS
+from baselines.evaluation.recording import (
+    RecordOptions,
+    add_record_options,
+    check_run_names,
+    record_options,
+    run_name,
+)
 from baselines.evaluation.specs import (
     SHORT_NAMES,
     expand_scenarios,
@@ -25,7 +32,7 @@ from baselines.evaluation.specs import (
 from baselines.experiments.benchmark.suites import SHORTCUTS, SUITES, Suite
 from baselines.reporting.tables import SCENARIO_KEYS
 from baselines.runtime import optional
-from baselines.runtime.cli import ArgumentParser
+from baselines.runtime.cli import ArgumentParser, user_errors
 from pairflock_env import make_config, preset_names
 
 __all__ = ["PROG", "Plan", "build_parser", "resolve"]
@@ -184,6 +191,7 @@ def build_parser(prog: str = PROG) -> argparse.ArgumentParser:
     _scenario_options(p)
     _seed_and_execution_options(p)
     _output_options(p.add_argument_group("output"))
+    add_record_options(p)
     return p
 
 
@@ -206,6 +214,22 @@ class Plan:
     metric_kwargs: dict[str, Any]
     figures: bool
     snapshots: bool
+    record: RecordOptions | None = None  # --record
+
+    def recording(self, i: int, j: int) -> RecordOptions | None:
+        """The recording options of scenario i x policy j (None without --record)."""
+        if self.record is None:
+            return None
+        sc, spec = self.scenarios[i], self.specs[j]
+        name = run_name(sc.label, spec.label)
+        return self.record.run(name, spec.label, scenario=sc.label, policy=spec.label)
+
+    def recorded_runs(self) -> list[RecordOptions]:
+        """The recording options of every recorded run (none without --record)."""
+        runs = (
+            self.recording(i, j) for i in range(len(self.scenarios)) for j in range(len(self.specs))
+        )
+        return [r for r in runs if r is not None]
 
 
 def _check_numbers(args: argparse.Namespace, parser: argparse.ArgumentParser) -> None:
@@ -372,7 +396,10 @@ def resolve(args: argparse.Namespace, parser: argparse.ArgumentParser) -> Plan:
         parser.error(
             f"--check verifies the paper's claims: it needs --preset paper, not {preset!r}"
         )
-    return Plan(
+    out = args.out or Path("results") / "benchmark" / args.suite
+    with user_errors(parser):
+        record = record_options(args, out, seeds)
+    plan = Plan(
         suite_name=args.suite,
         suite=suite,
         preset=preset,
@@ -383,8 +410,12 @@ def resolve(args: argparse.Namespace, parser: argparse.ArgumentParser) -> Plan:
         reprs=reprs,
         keys=_table_keys(grid, suite, listed),
         video=_video_target(args, specs, scenarios, parser),
-        out=args.out or Path("results") / "benchmark" / args.suite,
+        out=out,
         metric_kwargs=_metric_kwargs(args, configs),
         figures=not args.no_figures,
         snapshots=suite.snapshots and not args.no_snapshots,
+        record=record,
     )
+    with user_errors(parser):  # two runs whose recordings would share a folder
+        check_run_names(plan.recorded_runs())
+    return plan

@@ -13,6 +13,7 @@ from typing import Any
 from tqdm import tqdm
 
 from baselines.evaluation.jobs import make_jobs, run_jobs
+from baselines.evaluation.recording import report_line, written
 from baselines.evaluation.specs import slug
 from baselines.experiments.benchmark.cli import PROG, Plan, build_parser, resolve
 from baselines.experiments.benchmark.figures import load_traces, make_figures, save_traces
@@ -102,6 +103,7 @@ def simulate(plan: Plan, args) -> Results:
         record=lambda i, j: plan.figures or plan.video == (i, j),
         record_stride=lambda cfg: max(1, round(args.frame_dt / cfg.dt)),
         metric_kwargs=plan.metric_kwargs,
+        recording=plan.recording,
     )
     started, t0 = _now(), time.perf_counter()
     results: dict[tuple[int, int], list[dict[str, Any]]] = {}
@@ -197,6 +199,11 @@ def _write_video(path: Path, plan: Plan, res: Results, args) -> Path:
     )
 
 
+def _recordings(plan: Plan) -> list[str]:
+    """The recordings of the runs (--record), relative to the output folder."""
+    return written(plan.recorded_runs(), plan.seeds, plan.out)
+
+
 def _run_record(plan: Plan, res: Results, args, records, outputs, total_s: float):
     sc_records, pol_records = records
     return run_record(
@@ -211,6 +218,7 @@ def _run_record(plan: Plan, res: Results, args, records, outputs, total_s: float
         ray_address=args.ray_address,
         metric_options=plan.metric_kwargs,
         outputs=outputs,
+        recordings=_recordings(plan),
         timestamps={
             "started_utc": res.started.isoformat(timespec="seconds"),
             "finished_utc": _now().isoformat(timespec="seconds"),
@@ -303,6 +311,8 @@ def main(argv: Sequence[str] | None = None, prog: str = PROG) -> int:
         f"{total_s:.1f} s (simulation {res.sim_wall:.1f} s wall, {res.cpu_s:.1f} s CPU in jobs; "
         f"backend {args.backend}, {args.workers} workers)"
     )
+    if plan.record is not None:
+        print(report_line(_recordings(plan), plan.out))
     if args.check and not all_passed(checks):
         if not checks:
             print("--check: no acceptance criterion applies to these policies")

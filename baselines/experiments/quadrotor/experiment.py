@@ -35,6 +35,15 @@ from typing import Any
 from tqdm import tqdm
 
 from baselines.controllers import POLICIES, make_pair_policy
+from baselines.evaluation.recording import (
+    RecordOptions,
+    add_record_options,
+    check_run_names,
+    record_options,
+    report_line,
+    run_name,
+    written,
+)
 from baselines.evaluation.specs import parse_assignment
 from baselines.experiments.quadrotor.criteria import QUADROTOR, check_quadrotor
 from baselines.experiments.quadrotor.figures import figure_set
@@ -195,6 +204,7 @@ def build_parser() -> argparse.ArgumentParser:
         "learned sb3: policy run)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_record_options(p)
     return p
 
 
@@ -265,11 +275,27 @@ def criteria_policies(args: argparse.Namespace) -> list[str]:
     return [p for p in args.policies if p == "smc" or p.startswith("sb3:")]
 
 
-def _run(args, seeds, overrides, gains) -> dict[tuple[str, str], dict[str, Any]]:
+def _recordings(record: RecordOptions | None, args, gains) -> dict[tuple[str, str], Any]:
+    """The recording options of every (vehicle model, policy) run (None without --record);
+    ``ValueError`` when two runs would share a folder."""
+    combos = [(d, p) for d in args.dynamics for p in args.policies]
+    if record is None:
+        return dict.fromkeys(combos)
+    runs = {
+        (d, p): record.run(run_name(d, p), p, dynamics=d, policy=p, gains=gains.get(p, {}))
+        for d, p in combos
+    }
+    check_run_names(runs.values())
+    return runs
+
+
+def _run(args, seeds, overrides, gains, recordings) -> dict[tuple[str, str], dict[str, Any]]:
     combos = [(d, p) for d in args.dynamics for p in args.policies]
     combos.sort(key=lambda c: c[0] != "quadrotor")  # the slower model first
     record = not args.no_figures
-    tasks = [(d, p, seeds, overrides, gains, record and p != "zero") for d, p in combos]
+    tasks = [
+        (d, p, seeds, overrides, gains, record and p != "zero", recordings[d, p]) for d, p in combos
+    ]
     results: dict[tuple[str, str], dict[str, Any]] = {}
     with tqdm(
         total=len(combos), unit="job", desc="quadrotor experiment", disable=args.quiet
@@ -324,11 +350,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     """The experiment CLI (``python -m baselines.quadrotor_experiment``); the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     with user_errors(parser):
         overrides, gains = _settings(args)
-    seeds = list(range(args.first_seed, args.first_seed + args.seeds))
+        recordings = _recordings(record_options(args, args.out, seeds), args, gains)
     t0 = time.perf_counter()
-    results = _run(args, seeds, overrides, gains)
+    results = _run(args, seeds, overrides, gains, recordings)
     sim_wall = time.perf_counter() - t0
     keys = sorted(results, key=_order)
     rows = [r for k in keys for r in results[k]["rows"]]
@@ -345,7 +372,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         total = time.perf_counter() - t0
         record = _run_json(args, seeds, overrides, gains, results, sim_wall, total)
         names = ["results.csv", "summary.md", *(str(f.relative_to(folder)) for f in fig_paths)]
-        write_json(folder / "run.json", {**record, "outputs": sorted(names)})
+        recorded = written(recordings.values(), seeds, out)
+        write_json(
+            folder / "run.json", {**record, "outputs": sorted(names), "recordings": recorded}
+        )
     print(summarize(rows))
     if checks:
         print("\n" + "\n".join(criteria_lines(checks)))
@@ -353,4 +383,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"\nwrote {out / 'results.csv'}, {out / 'summary.md'}, {len(fig_paths)} figures in "
         f"{total:.1f} s (simulation {sim_wall:.1f} s, {args.workers} workers)"
     )
+    if recorded:
+        print(report_line(recorded, out))
     return 1 if args.check and not all_passed(checks) else 0

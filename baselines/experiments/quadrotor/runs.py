@@ -30,7 +30,8 @@ from typing import Any
 import numpy as np
 
 from baselines.controllers import make_pair_policy
-from baselines.evaluation.rollout import rollout, trace_metrics
+from baselines.evaluation.recording import RecordOptions, recorded_rollout
+from baselines.evaluation.rollout import trace_metrics
 from baselines.experiments.quadrotor.criteria import QUADROTOR
 from baselines.runtime.threads import pin_threads
 from pairflock_env import make_config
@@ -179,17 +180,20 @@ def run_job(
     overrides: dict[str, Any],
     gains: dict[str, Any],
     record: bool,
+    recording: RecordOptions | None = None,
 ) -> dict[str, Any]:
     """One (vehicle model, policy) combination over all seeds, batched in one core: its
-    rows, the series of pair 0 and, with ``record``, the first seed's states for figures."""
+    rows, the series of pair 0 and, with ``record``, the first seed's states for figures;
+    ``recording`` writes the runs' recordings (:mod:`baselines.evaluation.recording`)."""
     pin_threads()
 
     cfg = make_config(PRESET, dynamics=dynamics, **overrides)
     pol = make_pair_policy(policy, cfg, **gains.get(policy, {}))
     T = cfg.episode_steps
     rec = _Recorder(len(seeds), T, cfg.pairs[0], (0, cfg.pairs[0][0]) if record else None)
+    kept = (0,) if record else ()
     t0 = time.perf_counter()
-    tr = rollout(cfg, pol, seeds, record_rows=(0,) if record else (), on_step=rec)
+    tr = recorded_rollout(recording, cfg, pol, seeds, record_rows=kept, on_step=rec)
     wall = time.perf_counter() - t0
     rec.finish(tr.ended)
     out: dict[str, Any] = {
