@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import json
 import subprocess
 import sys
 
@@ -399,3 +400,13 @@ def test_the_nearest_neighbour_figure(tmp_path):
     assert [len(s["t"]) for s in series] == [6, 6]
     assert all(s["min"][k] <= s["p1"][k] <= s["p50"][k] for s in series for k in range(6))
     assert nearest_figure(series, tmp_path / "nn.png").stat().st_size > 0
+
+
+def test_the_nearest_neighbour_command_flies_the_layers_and_horizon_it_is_given(tmp_path):
+    out = tmp_path / "nn.png"
+    cmd = [sys.executable, "-m", "baselines.experiments.safety.nearest", "--n", "30"]
+    cmd += ["--layers", "swarm", "--horizon", "1", "--every", "0.5", "--out", str(out)]
+    printed = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
+    (series,) = json.loads(out.with_suffix(".json").read_text())
+    assert series["layer"] == "swarm" and series["t"] == [0.0, 0.5, 1.0]
+    assert "N=    30 swarm" in printed and out.stat().st_size > 0

@@ -134,7 +134,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             if min(args.n) < 2 or not args.every > 0:
                 raise ValueError("--n must be >= 2 and --every > 0")
             series = [
-                nearest_series(n, lay, args.seed, args.every) for n in args.n for lay in LAYERS
+                nearest_series(n, lay, args.seed, args.every, args.horizon)
+                for n in args.n
+                for lay in args.layers
             ]
             args.out.with_suffix(".json").write_text(json.dumps(series, indent=1) + "\n")
         for s in series:
