@@ -61,6 +61,7 @@ import numpy as np
 
 from pairflock_env.dynamics.crazyflie.kernels import fly_kernel, setpoint_kernel
 from pairflock_env.dynamics.crazyflie.params import CrazyflieParams
+from pairflock_env.dynamics.quadrotor.model import QuadrotorModel
 
 __all__ = ["CMD_FIELDS", "CrazyflieModel", "quat_xyzw"]
 
@@ -126,17 +127,8 @@ class CrazyflieModel:
     """
 
     name = "crazyflie"
-    #: the keys of :meth:`info` (those of the quadrotor model)
-    INFO_KEYS = (
-        "vehicle_terminated",
-        "crashed_uavs",
-        "motor_saturated_uavs",
-        "accel_limited_uavs",
-        "crashed",
-        "motor_saturated",
-        "accel_limited",
-        "tilt",
-    )
+    #: the keys of :meth:`info`: those of the quadrotor model
+    INFO_KEYS = QuadrotorModel.INFO_KEYS
 
     def __init__(self, config: Any, num_swarms: int) -> None:
         if config.dim != 3:
