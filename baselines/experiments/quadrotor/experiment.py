@@ -3,6 +3,7 @@
     python -m baselines.quadrotor_experiment                # 10 seeds, smc/proportional/zero
     python -m baselines.quadrotor_experiment --check        # also verify the Sec. VI-B criteria
     python -m baselines.quadrotor_experiment --policies smc sb3:pair_quad3d   # a learned policy
+    python -m baselines.quadrotor_experiment --preset crazyflie --check  # the scaled scenario
 
 Runs the ``paper-quadrotor`` preset (docs/quadrotor.md): 10 quadrotors, one pair starting
 28 m apart, the virtual leader at 5 m/s climbing for 20 s and turning left by 90 degrees
@@ -26,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import os
 import time
 from collections.abc import Sequence
@@ -45,9 +47,15 @@ from baselines.evaluation.recording import (
     written,
 )
 from baselines.evaluation.specs import parse_assignment
-from baselines.experiments.quadrotor.criteria import QUADROTOR, check_quadrotor
+from baselines.experiments.quadrotor.criteria import (
+    QUADROTOR,
+    SCENARIO_WINDOWS,
+    check_quadrotor,
+    criteria_for,
+    windows_text,
+)
 from baselines.experiments.quadrotor.figures import figure_set
-from baselines.experiments.quadrotor.runs import PRESET, STRAIGHT_WINDOWS, run_job, scenario_metrics
+from baselines.experiments.quadrotor.runs import PRESET, run_job, scenario_metrics
 from baselines.reporting.criteria import all_passed, criteria_lines, criteria_table
 from baselines.reporting.tables import stat_cell, summary_table
 from baselines.runtime.cli import ArgumentParser, at_least, user_errors
@@ -88,7 +96,7 @@ def _crashes_cell(values: list[Any], rows: list[dict[str, Any]]) -> str:
 
 
 SUMMARY_COLUMNS = (
-    ("band_entry_time", "first in 0.5 m band (s)", "{:.2f}"),
+    ("band_entry_time", "first in the band (s)", "{:.2f}"),
     ("straight_max_error", "straight max err (m)", "{:.3f}"),
     ("straight_mean_error", "straight mean err (m)", "{:.3f}"),
     ("turn_peak_error", "turn peak err (m)", "{:.3f}"),
@@ -104,7 +112,7 @@ SUMMARY_COLUMNS = (
 def _order(key: tuple[str, str]) -> tuple[int, int]:
     dyn, pol = key
     return (
-        {"quadrotor": 0, "particle": 1}.get(dyn, 2),
+        {"quadrotor": 0, "crazyflie": 0, "particle": 1}.get(dyn, 2),
         {"smc": 0, "proportional": 1, "zero": 2}.get(pol, 3),
     )
 
@@ -122,6 +130,13 @@ def summarize(rows: Sequence[dict[str, Any]]) -> str:
 
 # --------------------------------------------------------------------------- CLI
 def _run_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--preset",
+        default=PRESET,
+        choices=list(SCENARIO_WINDOWS),
+        help="the scenario: the paper's, or the crazyflie preset (10 Crazyflies in a lab), "
+        "whose criteria are the paper's with every length scaled by its d_m / 2.5 m",
+    )
     p.add_argument("--seeds", type=int, default=10, help="number of seeds per combination")
     p.add_argument(
         "--first-seed", type=at_least(0), default=0, help="seeds are first-seed, first-seed+1, ..."
@@ -136,9 +151,9 @@ def _run_options(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--dynamics",
         nargs="+",
-        default=["quadrotor", "particle"],
-        choices=["quadrotor", "particle"],
-        help="vehicle models to compare",
+        default=None,
+        choices=["quadrotor", "crazyflie", "particle"],
+        help="vehicle models to compare (default: the preset's and the particle)",
     )
     p.add_argument(
         "--smc-k",
@@ -214,6 +229,8 @@ def _settings(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, dict[
         raise ValueError(f"--seeds={args.seeds} is invalid: must be >= 1")
     if args.workers < 1:
         raise ValueError(f"--workers={args.workers} is invalid: must be >= 1")
+    if args.dynamics is None:  # the preset's vehicle, and the particle for the attitude cost
+        args.dynamics = [criteria_for(args.preset).vehicle, "particle"]
     for pol in args.policies:
         if pol not in POLICIES and ":" not in pol:
             raise ValueError(f"--policies {pol!r} is invalid: valid are {', '.join(POLICIES)}")
@@ -222,7 +239,7 @@ def _settings(args: argparse.Namespace) -> tuple[dict[str, Any], dict[str, dict[
         overrides["horizon"] = args.horizon
     for dyn in args.dynamics:  # fail early, in this process, on a bad override
         try:
-            make_config(PRESET, dynamics=dyn, **overrides)
+            make_config(args.preset, dynamics=dyn, **overrides)
         except (TypeError, ValueError) as exc:
             raise ValueError(f"invalid configuration: {exc}") from None
     gains: dict[str, dict[str, float]] = {"smc": {}, "proportional": {}}
@@ -251,7 +268,7 @@ def _check_policies(args: argparse.Namespace, overrides, gains) -> None:
     for pol in (p for p in args.policies if ":" in p):
         for dyn in args.dynamics:
             try:
-                make_pair_policy(pol, make_config(PRESET, dynamics=dyn, **overrides))
+                make_pair_policy(pol, make_config(args.preset, dynamics=dyn, **overrides))
             except (TypeError, ValueError, FileNotFoundError) as exc:
                 raise ValueError(f"--policies {pol!r} is invalid for {dyn}: {exc}") from None
     flags = {"k": "--smc-k", "c": "--smc-c", "boundary_layer": "--smc-boundary-layer"}
@@ -260,7 +277,7 @@ def _check_policies(args: argparse.Namespace, overrides, gains) -> None:
             continue
         try:
             make_pair_policy(
-                pol, make_config(PRESET, dynamics=args.dynamics[0], **overrides), **given
+                pol, make_config(args.preset, dynamics=args.dynamics[0], **overrides), **given
             )
         except (TypeError, ValueError) as exc:
             names = ", ".join(flags.get(g, "--kp") for g in given)
@@ -300,7 +317,8 @@ def _run(args, seeds, overrides, gains, recordings) -> dict[tuple[str, str], dic
     with tqdm(
         total=len(combos), unit="job", desc="quadrotor experiment", disable=args.quiet
     ) as bar:
-        for i, res in imap_unordered(run_job, tasks, args.workers):
+        job = functools.partial(run_job, preset=args.preset)
+        for i, res in imap_unordered(job, tasks, args.workers):
             results[combos[i]] = res
             bar.update()
     return results
@@ -308,27 +326,29 @@ def _run(args, seeds, overrides, gains, recordings) -> dict[tuple[str, str], dic
 
 def _summary(rows, results, keys, seeds, overrides, gains, checks, checked) -> str:
     cfg = results[keys[0]]["config"]
+    c = criteria_for(cfg.preset)
     intro = (
-        f"Preset `{PRESET}` (docs/quadrotor.md), {len(seeds)} seeds ({seeds[0]}-{seeds[-1]}) "
+        f"Preset `{cfg.preset}` (docs/quadrotor.md), {len(seeds)} seeds ({seeds[0]}-{seeds[-1]}) "
         f"per row, {cfg.episode_steps * cfg.dt:g} s, protocol every {cfg.dt:g} s, physics "
-        f"every {cfg.physics_dt:g} s; median [min-max] over seeds. Straight flight = "
-        "[15,20], [27,50], [57,65] s; turns = [20,27], [50,57] s; velocity mismatch over "
-        "[35,50], [60,65] s. The particle model flies the same scenario, seeds and gains "
-        "without the quadrotor's acceleration limit and tilt cone."
+        f"every {cfg.physics_dt:g} s; median [min-max] over seeds. Band {c.band:g} m; "
+        f"straight flight = {windows_text(c.straight_windows)} s; turns = "
+        f"{windows_text(c.turn_windows)} s; velocity mismatch over "
+        f"{windows_text(c.velocity_windows)} s. The particle model flies the same scenario, "
+        f"seeds and gains without the {c.vehicle}'s limits."
     )
     md = ["# Sec. VI-B: 10 quadrotors, pairwise control", "", intro, "", summarize(rows), ""]
     if overrides or any(gains.values()):
         md += [f"Overrides: `{overrides}`; gains: `{gains}`.", ""]
     if checks:
         who = "sliding mode" if checked == ["smc"] else ", ".join(f"`{p}`" for p in checked)
-        md += [f"## Criteria ({who} on the quadrotor, every seed)", ""]
+        md += [f"## Criteria ({who} on the {c.vehicle}, every seed)", ""]
         md += criteria_table(checks)
     return "\n".join(md) + "\n"
 
 
 def _run_json(args, seeds, overrides, gains, results, sim_wall, total) -> dict[str, Any]:
     return run_record(
-        preset=PRESET,
+        preset=args.preset,
         seeds=seeds,
         policies=args.policies,
         dynamics=args.dynamics,
@@ -361,14 +381,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     rows = [r for k in keys for r in results[k]["rows"]]
     out = args.out
     checked = criteria_policies(args)
-    checks = check_quadrotor(rows, policies=checked)
+    crit = criteria_for(args.preset)
+    checks = check_quadrotor(rows, crit, policies=checked)
     with result_folder(out) as folder:  # complete and consistent, or marked INCOMPLETE
         write_csv(folder / "results.csv", rows, list(rows[0]))
         md = _summary(rows, results, keys, seeds, overrides, gains, checks, checked)
         atomic_write_text(folder / "summary.md", md)
         fig_paths = []
         if not args.no_figures:
-            fig_paths = figure_set(results, folder, args.dpi, STRAIGHT_WINDOWS, QUADROTOR.band)
+            fig_paths = figure_set(results, folder, args.dpi, crit.straight_windows, crit.band)
         total = time.perf_counter() - t0
         record = _run_json(args, seeds, overrides, gains, results, sim_wall, total)
         names = ["results.csv", "summary.md", *(str(f.relative_to(folder)) for f in fig_paths)]

@@ -8,7 +8,10 @@ Per seed it measures (times in s, distances in m):
 * ``straight_max_error``: max |pair error| in straight flight, [15, 20], [27, 50], [57, 65];
 * ``turn_peak_error``: max |pair error| in and after the turns, [20, 27] and [50, 57];
 * ``min_distance``: smallest distance between any two UAVs (partners included) at any time;
-* ``velocity_mismatch``: max ||p_i - p_leader|| of the unpaired UAVs in [35, 50] and [60, 65];
+* ``velocity_mismatch``: max ||p_i - p_leader|| of the unpaired UAVs in [35, 50] and [60, 65]
+  (the band and windows of ``paper-quadrotor``; another scenario's, e.g. the scaled
+  ``crazyflie`` preset's, come from
+  :func:`~baselines.experiments.quadrotor.criteria.criteria_for`);
 * ``pair_offset``: mean distance of the pair's midpoint from the virtual leader in straight
   flight (where the pair flies relative to its flock, which stays centred on the leader);
 * ``turn_peak_since_filter``: with the safety filter on, the time from the end of the last
@@ -32,7 +35,7 @@ import numpy as np
 from baselines.controllers import make_pair_policy
 from baselines.evaluation.recording import RecordOptions, recorded_rollout
 from baselines.evaluation.rollout import trace_metrics
-from baselines.experiments.quadrotor.criteria import QUADROTOR
+from baselines.experiments.quadrotor.criteria import QUADROTOR, QuadrotorCriteria, criteria_for
 from baselines.runtime.threads import pin_threads
 from pairflock_env import make_config
 
@@ -47,9 +50,9 @@ __all__ = [
 
 PRESET = "paper-quadrotor"
 #: straight flight, and the turns with the recovery after them, in s
-STRAIGHT_WINDOWS = ((15.0, 20.0), (27.0, 50.0), (57.0, 65.0))
-TURN_WINDOWS = ((20.0, 27.0), (50.0, 57.0))
-VELOCITY_WINDOWS = ((35.0, 50.0), (60.0, 65.0))
+STRAIGHT_WINDOWS = QUADROTOR.straight_windows
+TURN_WINDOWS = QUADROTOR.turn_windows
+VELOCITY_WINDOWS = QUADROTOR.velocity_windows
 
 
 def _window_mask(t: np.ndarray, windows) -> np.ndarray:
@@ -65,17 +68,19 @@ def scenario_metrics(
     min_distance: np.ndarray,
     velocity_mismatch_max: np.ndarray,
     pair_offset: np.ndarray,
-    band: float = QUADROTOR.band,
+    band: float | None = None,
     filter_active: np.ndarray | None = None,
+    criteria: QuadrotorCriteria = QUADROTOR,
 ) -> dict[str, float]:
     """The Sec. VI-B figures of one run from its series (each (T,), sampled at times t;
     ``filter_active``: whether the safety filter changed a paired UAV's command at each
-    sample, None without the filter)."""
+    sample, None without the filter), in the windows of ``criteria`` (and its band unless
+    ``band`` is given)."""
     err = np.abs(pair_error)
-    inside = np.flatnonzero(err < band)
-    straight = _window_mask(t, STRAIGHT_WINDOWS)
-    turns = _window_mask(t, TURN_WINDOWS)
-    vel = _window_mask(t, VELOCITY_WINDOWS)
+    inside = np.flatnonzero(err < (criteria.band if band is None else band))
+    straight = _window_mask(t, criteria.straight_windows)
+    turns = _window_mask(t, criteria.turn_windows)
+    vel = _window_mask(t, criteria.velocity_windows)
     nan = float("nan")
     since = nan
     if filter_active is not None and turns.any():
@@ -145,7 +150,9 @@ class _Recorder:
                 arr[b, e + 1 :] = arr[b, e]
 
 
-def _rows(dynamics: str, policy: str, tr, rec: _Recorder) -> list[dict[str, Any]]:
+def _rows(
+    dynamics: str, policy: str, tr, rec: _Recorder, criteria: QuadrotorCriteria = QUADROTOR
+) -> list[dict[str, Any]]:
     """One row per swarm (the scenario has one pair)."""
     rows = []
     for b, g in enumerate(trace_metrics(tr)):
@@ -156,6 +163,7 @@ def _rows(dynamics: str, policy: str, tr, rec: _Recorder) -> list[dict[str, Any]
             rec.velocity_mismatch[b],
             rec.pair_offset[b],
             filter_active=None if rec.filter_active is None else rec.filter_active[b],
+            criteria=criteria,
         )
         steps = max(int(tr.ended[b]), 1)
         rows.append(
@@ -181,13 +189,16 @@ def run_job(
     gains: dict[str, Any],
     record: bool,
     recording: RecordOptions | None = None,
+    *,
+    preset: str = PRESET,
 ) -> dict[str, Any]:
     """One (vehicle model, policy) combination over all seeds, batched in one core: its
     rows, the series of pair 0 and, with ``record``, the first seed's states for figures;
-    ``recording`` writes the runs' recordings (:mod:`baselines.evaluation.recording`)."""
+    ``recording`` writes the runs' recordings (:mod:`baselines.evaluation.recording`);
+    ``preset``: the scenario (its Sec. VI-B windows: ``criteria_for(preset)``)."""
     pin_threads()
 
-    cfg = make_config(PRESET, dynamics=dynamics, **overrides)
+    cfg = make_config(preset, dynamics=dynamics, **overrides)
     pol = make_pair_policy(policy, cfg, **gains.get(policy, {}))
     T = cfg.episode_steps
     rec = _Recorder(len(seeds), T, cfg.pairs[0], (0, cfg.pairs[0][0]) if record else None)
@@ -199,7 +210,7 @@ def run_job(
     out: dict[str, Any] = {
         "dynamics": dynamics,
         "policy": policy,
-        "rows": _rows(dynamics, policy, tr, rec),
+        "rows": _rows(dynamics, policy, tr, rec, criteria_for(preset)),
         "wall_s": wall,
         "sim_s": float(len(seeds) * T * cfg.dt),
         "t": tr.t,
