@@ -19,8 +19,9 @@ def _find(parent, x):
 
 @njit(cache=False)
 def _reference(q, p, ql, pl, h, partner, prm, acc, min_d2, ncol, lcc, bad, vmis, vmax):
-    a, r, inv_s2, r2, c, c1, c2, coll2, limit, floor2, floor_gain = prm
+    a, r, inv_s2, r2, c, c1, c2, coll2, limit, floor2, floor_gain, squash, _ = prm
     B, N, D = q.shape
+    ellipse = squash != 1.0 and D == 3  # the collision ellipsoid (collision_height)
     parent = np.empty(N, np.int64)
     size = np.empty(N, np.int64)
     n_unpaired = 0
@@ -59,7 +60,12 @@ def _reference(q, p, ql, pl, h, partner, prm, acc, min_d2, ncol, lcc, bad, vmis,
                 if j != partner[i]:
                     min_d2[b, i] = d2 if d2 < min_d2[b, i] else min_d2[b, i]
                     min_d2[b, j] = d2 if d2 < min_d2[b, j] else min_d2[b, j]
-                nc += d2 < coll2
+                if ellipse:  # dx^2 + dy^2 + squash dz^2 < collision_distance^2
+                    x, y = q[b, j, 0] - q[b, i, 0], q[b, j, 1] - q[b, i, 1]
+                    z = q[b, j, 2] - q[b, i, 2]
+                    nc += x * x + y * y + squash * (z * z) < coll2
+                else:
+                    nc += d2 < coll2
                 if d2 < r2:
                     w = a - r * np.exp(-d2 * inv_s2)
                     if d2 < floor2 and d2 > 0.0:  # the swarm layer's repulsion floor

@@ -36,15 +36,36 @@ def same(a: np.ndarray, b: np.ndarray) -> bool:
     return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
 
 
+def ellipsoid_collisions(q: np.ndarray, horizontal: float, vertical: float) -> np.ndarray:
+    """Per swarm, the UAV pairs i < j with (dx^2 + dy^2) / horizontal^2 + dz^2 / vertical^2
+    < 1: the collision ellipsoid counted directly, in numpy."""
+    d = q[:, :, None, :] - q[:, None, :, :]
+    e = (d[..., 0] ** 2 + d[..., 1] ** 2) / horizontal**2 + d[..., 2] ** 2 / vertical**2
+    return np.triu(e < 1.0, k=1).sum(axis=(1, 2))
+
+
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("kind", ["sparse", "packed", "ties", "lattice", "nonfinite"])
 @pytest.mark.parametrize("floor", [False, True])
-def test_flocking_pass_equals_the_symmetric_sweep(kind, dim, floor):
+@pytest.mark.parametrize("ellipsoid", [False, True])
+def test_flocking_pass_equals_the_symmetric_sweep(kind, dim, floor, ellipsoid):
+    if ellipsoid and dim == 2:
+        pytest.skip("the collision ellipsoid needs dim=3")
     rng = np.random.default_rng(7 + dim)
     layer = dict(safety_filter="cbf", safety_scope="swarm") if floor else {}
+    # an ellipsoid 3x taller than wide, as Crazyswarm's; its height reaches past the radius
+    # (8.4 m), so that the grid's cells follow collision_height
+    shape = dict(collision_distance=3.0, collision_height=9.0) if ellipsoid else {}
+    if ellipsoid and floor:  # the filter's sphere must hold the ellipsoid
+        layer["safety_distance"] = 9.0
     for N, B in ((150, 3), (9, 2), (2, 1), (700, 1)):
         cfg = make_config(
-            "paper", n_uavs=N, dim=dim, pairs=((0, 1),), collision_distance=2.0, **layer
+            "paper",
+            n_uavs=N,
+            dim=dim,
+            pairs=((0, 1),),
+            **{"collision_distance": 2.0, **shape},
+            **layer,
         )
         prm = flocking_params(cfg)
         q, p = _state(kind, rng, B, N, dim), rng.normal(0.0, 2.0, (B, N, dim))
@@ -53,9 +74,26 @@ def test_flocking_pass_equals_the_symmetric_sweep(kind, dim, floor):
         partner = np.full(N, -1, np.int64)
         partner[[0, 1]] = [1, 0]
         ref = reference_flocking_pass(prm, q, p, lq, lp, pinned, partner)
-        grid = NeighborGrid(B, N, dim, max(cfg.radius, cfg.collision_distance)).build(q)
+        if ellipsoid and kind != "nonfinite":  # the reference's count is the direct one
+            direct = ellipsoid_collisions(q, 3.0, 9.0)
+            assert np.array_equal(ref["collisions"], direct)
+            if kind == "packed" and N >= 150:  # more than the sphere of the horizontal radius
+                d = np.linalg.norm(q[:, :, None] - q[:, None], axis=-1)
+                assert np.all(direct > np.triu(d < 3.0, 1).sum(axis=(1, 2)))
+        cell = max(cfg.radius, cfg.collision_distance, cfg.collision_height or 0.0)
+        grid = NeighborGrid(B, N, dim, cell).build(q)
         for g in (None, grid):
             got = flocking_pass(prm, q, p, lq, lp, pinned, partner, grid=g)
             for k, v in ref.items():
                 assert same(got[k], v), (k, g is not None)
         assert kind != "packed" or ref["largest_component"].min() > N // 2
+
+
+def test_the_grid_refuses_cells_shorter_than_the_ellipsoid():
+    cfg = make_config("paper", n_uavs=20, dim=3, collision_distance=3.0, collision_height=9.0)
+    q = np.random.default_rng(0).normal(0.0, 5.0, (1, 20, 3))
+    short = NeighborGrid(1, 20, 3, cfg.radius).build(q)  # 8.4 m < collision_height
+    z = np.zeros((1, 3))
+    args = (q, np.zeros_like(q), z, z, np.ones((1, 20)), np.full(20, -1, np.int64))
+    with pytest.raises(ValueError, match="collision_height"):
+        flocking_pass(flocking_params(cfg), *args, grid=short)

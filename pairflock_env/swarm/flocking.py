@@ -48,6 +48,7 @@ import numpy as np
 
 from pairflock_env.config import PairFlockConfig
 from pairflock_env.config.sections.flocking import repulsion_floor
+from pairflock_env.config.sections.reward import collision_ellipsoid
 from pairflock_env.kernels import (
     BoundKernel,
     KernelParams,
@@ -112,6 +113,8 @@ FLOCKING = KernelParams(
         "divergence_limit",
         "floor_radius2",
         "floor_gain",
+        "collision_squash",
+        "collision_height2",
     ),
 )
 FlockScalars = namedtuple("FlockScalars", FLOCKING.names)
@@ -121,8 +124,11 @@ _F = FLOCKING.index
 
 def flocking_params(cfg: PairFlockConfig) -> np.ndarray:
     """The flocking pass's parameter vector (:data:`FLOCKING`) of a config (the repulsion
-    floor: :func:`~pairflock_env.config.sections.flocking.repulsion_floor`)."""
+    floor: :func:`~pairflock_env.config.sections.flocking.repulsion_floor`; the collision
+    ellipsoid's squash: :func:`~pairflock_env.config.sections.reward.collision_ellipsoid`,
+    1 for the sphere)."""
     floor_radius2, floor_gain = repulsion_floor(cfg)
+    ellipsoid = collision_ellipsoid(cfg)
     return FLOCKING.pack(
         attraction=cfg.attraction,
         repulsion=cfg.repulsion,
@@ -135,6 +141,8 @@ def flocking_params(cfg: PairFlockConfig) -> np.ndarray:
         divergence_limit=cfg.divergence_limit,
         floor_radius2=floor_radius2,
         floor_gain=floor_gain,
+        collision_squash=1.0 if ellipsoid is None else ellipsoid[1],
+        collision_height2=(cfg.collision_height or cfg.collision_distance) ** 2,
     )
 
 
@@ -152,6 +160,8 @@ def _scalars(v):
         v[_F.divergence_limit],
         v[_F.floor_radius2],
         v[_F.floor_gain],
+        v[_F.collision_squash],
+        v[_F.collision_height2],
     )
 
 
@@ -219,7 +229,20 @@ def _three(dims):
 @jit_inline
 def _floor(dims):
     """Whether ``dims`` (see :data:`_DIMS`) is a kernel's with the repulsion floor."""
-    return len(dims) > 3
+    return ((len(dims) - 2) >> 1) & 1 == 1
+
+
+@jit_inline
+def _ellipse(dims):
+    """Whether ``dims`` (see :data:`_DIMS`) is a kernel's with the collision ellipsoid."""
+    return ((len(dims) - 2) >> 2) & 1 == 1
+
+
+@jit_inline
+def _ellipse_hit(prm, a, e, z):
+    """Whether offset (a, e, z) lies inside the collision ellipsoid: a^2 + e^2 + squash z^2
+    < collision_distance^2, squash = (collision_distance / collision_height)^2."""
+    return a * a + e * e + prm.collision_squash * (z * z) < prm.collision_distance2
 
 
 @jit_inline
@@ -244,10 +267,11 @@ def _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2):
 
 
 @jit_inline
-def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor):
+def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor, ellipse):
     """UAV x (in slot s) against the candidate list (indices in increasing order, every
     UAV within reach of x among them, x too): x's separation and flocking command, and
-    its edges of the interaction graph; returns the collisions seen from x.
+    its edges of the interaction graph; returns the collisions seen from x (inside the
+    sphere of collision_distance, or with ``ellipse`` the collision ellipsoid).
 
     UAV x gathers its own command: the pinning term, then f_xj of each neighbour j in
     increasing j. That is the order in which the symmetric sweep of the equations (f_ij
@@ -268,7 +292,12 @@ def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor):
     for c in range(n):  # separation (the partner left out) and collisions: vectorised
         v = rowu[c] if cidx[c] != px else inf_bits
         m = v if v < m else m
-        nc += row[c] < prm.collision_distance2
+        if not ellipse:
+            nc += row[c] < prm.collision_distance2
+    if ellipse:  # (3-D only) offsets by axis, itself left out
+        for c in range(n):
+            hit = _ellipse_hit(prm, fw[CQ, c] - x0, fw[CQ + 1, c] - x1, fw[CQ + 2, c] - x2)
+            nc += hit & (c != sx)
     fw[MD, s] = bits_float(m)
     k = 0
     for w in range((n + 63) >> 6):  # the neighbours, in increasing index
@@ -305,7 +334,7 @@ def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor):
 @jit_kernel
 def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
     """Every UAV of swarm b against every other; returns the number of collisions."""
-    three, floor = _three(dims), _floor(dims)
+    three, floor, ellipse = _three(dims), _floor(dims), _ellipse(dims)
     N = q.shape[1]
     for i in range(N):  # slots, and the candidate list, in index order
         iw[ORDER, i] = iw[CIDX, i] = iw[CSLOT, i] = i
@@ -313,7 +342,7 @@ def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
     gather(N, fw, iw, three)
     nc = 0
     for x in range(N):
-        nc += _gather_uav(x, x, N, prm, fw, fwu, iw, three, floor)
+        nc += _gather_uav(x, x, N, prm, fw, fwu, iw, three, floor, ellipse)
     put_slots(b, iw[ORDER], acc, min_d2, fw, three)
     return nc // 2  # each pair was seen from both sides
 
@@ -325,7 +354,7 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
     after it kept in ``wm[x, j]`` and x marked in that neighbour's bits ``lb[j]``, so that
     x finds its neighbours before it, in order, with their weights. The same sums in the
     same order; half the distances and exponentials. Needs ``wm`` of N x N."""
-    three, floor = _three(dims), _floor(dims)
+    three, floor, ellipse = _three(dims), _floor(dims), _ellipse(dims)
     N = q.shape[1]
     for i in range(N):  # positions and velocities by axis, in index order
         for k in range(3 if three else 2):
@@ -360,7 +389,10 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
             other = t != skip
             v = float_bits(d2) if other else inf_bits
             m = v if v < m else m
-            nc += d2 < prm.collision_distance2
+            if ellipse:
+                nc += _ellipse_hit(prm, a, e, a2[t] - x2)
+            else:
+                nc += d2 < prm.collision_distance2
             near += d2 < prm.radius2
             mj = md[t]
             md[t] = d2 if (d2 < mj) & other else mj
@@ -408,7 +440,7 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
     candidate list (its one-ring, put in index order once), and UAVs, candidates and the
     union-find forest are all held in slot (cell) order, so that memory follows space
     whatever the indices. The same results."""
-    three, floor = _three(dims), _floor(dims)
+    three, floor, ellipse = _three(dims), _floor(dims), _ellipse(dims)
     N = q.shape[1]
     order = g.order[b]
     copy_slots(q, p, b, order, partner, acc, fw, iw, three)
@@ -438,7 +470,7 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
         sort_indices(cidx, cslot, n, iw[TMP], iw[TMP2], iw[HIST], N)
         gather(n, fw, iw, three)
         for s2 in range(s, end):
-            nc += _gather_uav(s2, order[s2], n, prm, fw, fwu, iw, three, floor)
+            nc += _gather_uav(s2, order[s2], n, prm, fw, fwu, iw, three, floor, ellipse)
         s = end
     put_slots(b, order, acc, min_d2, fw, three)
     # the one-ring proves separations shorter than a cell; the others need a wider search
@@ -493,10 +525,17 @@ _FLOCK_KEYS += ("velocity_mismatch", "velocity_mismatch_max", "_fw", "_fwu", "_i
 #: all pairs meet each pair once (:func:`_sweep_pairs`) up to this many UAVs, whose N x N
 #: weights take 2 MB; beyond, each UAV meets the others in turn (:func:`_sweep_all_pairs`)
 _PAIRS_MAX = 512
-#: the ``dims`` argument of the kernels: its length is the dimension (2 or 3), plus 2 with the
-#: swarm layer's repulsion floor, so that each combination compiles its own kernels (the
-#: floor's test leaves the pair loops of the paper's law)
-_DIMS = {(2, False): (0, 0), (3, False): (0, 0, 0), (2, True): (0,) * 4, (3, True): (0,) * 5}
+#: the ``dims`` argument of the kernels, keyed by (dimension, repulsion floor, collision
+#: ellipsoid): its length is the dimension (2 or 3), plus 2 with the swarm layer's repulsion
+#: floor, plus 4 with the collision ellipsoid (3-D only), so that each combination compiles
+#: its own kernels (the floor's and the ellipsoid's tests leave the pair loops of the
+#: paper's law, whose kernels compile as before)
+_DIMS = {
+    (D, floor, ellipse): (0,) * (D + 2 * floor + 4 * ellipse)
+    for D in (2, 3)
+    for floor in (False, True)
+    for ellipse in ((False, True) if D == 3 else (False,))
+}
 
 
 def flocking_pass(
@@ -520,12 +559,13 @@ def flocking_pass(
         partner: partner index of each UAV or -1, (N,) int64.
         out: preallocated outputs to reuse (as returned by a previous call).
         grid: ``None`` for all pairs, or a :class:`~pairflock_env.swarm.grid.NeighborGrid`
-            with ``cell_size >= max(radius, collision_distance)``, built from ``q``'s current
-            values. Both give identical results.
+            with ``cell_size >= max(radius, collision_distance, collision_height)``, built
+            from ``q``'s current values. Both give identical results.
 
     Returns:
         dict with ``acc`` (B, N, dim) m/s^2, ``min_d2`` (B, N) squared distance to the nearest
-        non-partner UAV, ``collisions`` (B,) int, ``largest_component`` (B,) int,
+        non-partner UAV, ``collisions`` (B,) int (pairs inside the collision sphere, or the
+        collision ellipsoid when the params' squash is not 1), ``largest_component`` (B,) int,
         ``diverged`` (B,) bool, ``velocity_mismatch`` / ``velocity_mismatch_max`` (B,) mean
         and max of ||p_i - p_leader|| over the unpaired UAVs (all UAVs when every UAV is
         paired). Per-swarm sums run sequentially, so results do not depend on B.
@@ -543,11 +583,12 @@ def flocking_runner(
     checked and the outputs allocated (or ``out`` reused) once. Returns
     ``run(q, p, leader_q, leader_p, pinned, partner) -> out`` (the same dict every call)."""
     B, N, D = shape
+    ellipse = bool(params[_F.collision_squash] != 1.0) and D == 3
     check_grid(
         grid,
         tuple(shape),
-        max(params[_F.radius2], params[_F.collision_distance2]),
-        "max(radius, collision_distance)",
+        max(params[_F.radius2], params[_F.collision_distance2], params[_F.collision_height2]),
+        "max(radius, collision_distance, collision_height)",
     )
     if out is None or out["acc"].shape != tuple(shape):
         words = (N + 63) // 64
@@ -567,7 +608,8 @@ def flocking_runner(
         n_wm = N if grid is None and N <= _PAIRS_MAX else 0  # (the grid's fallback: rows)
         out["_wm"] = np.zeros((n_wm, n_wm))
         out["_lb"] = np.zeros((n_wm, words), np.uint64)
-    tail = (params, _DIMS[D, bool(params[_F.floor_radius2] > 0)], *(out[k] for k in _FLOCK_KEYS))
+    dims = _DIMS[D, bool(params[_F.floor_radius2] > 0), ellipse]
+    tail = (params, dims, *(out[k] for k in _FLOCK_KEYS))
     if grid is None:
         return BoundKernel(_flocking_kernel, tail, out)
     return BoundKernel(_flocking_grid_kernel, (*tail, *grid.arrays), out)

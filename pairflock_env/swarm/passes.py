@@ -28,11 +28,11 @@ __all__ = ["NeighborPass", "make_grid"]
 
 
 def make_grid(cfg: PairFlockConfig, num_swarms: int) -> NeighborGrid | None:
-    """The grid every pass of ``cfg`` can use (cells of ``max(radius, collision_distance)``),
-    or ``None`` when ``neighbor_search`` resolves to all pairs."""
+    """The grid every pass of ``cfg`` can use (cells of ``max(radius, collision_distance,
+    collision_height)``), or ``None`` when ``neighbor_search`` resolves to all pairs."""
     if not cfg.uses_grid:
         return None
-    cell = max(cfg.radius, cfg.collision_distance)
+    cell = max(cfg.radius, cfg.collision_distance, cfg.collision_height or 0.0)
     return NeighborGrid(num_swarms, cfg.n_uavs, cfg.dim, cell_size=cell)
 
 

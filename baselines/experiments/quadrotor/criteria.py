@@ -224,7 +224,7 @@ def _policy_checks(rows, name: str, c: QuadrotorCriteria) -> list[tuple[str, boo
         line(
             f"no two UAVs closer than {c.min_distance:g} m",
             "separation",
-            f"min {np.min(md):.3f} m",
+            f"min {np.min(md):.3f} m{_ellipsoid_detail(quad)}",
         ),
         line(
             f"unpaired velocity within {c.velocity_tolerance:g} m/s of the leader "
@@ -245,6 +245,20 @@ def _policy_checks(rows, name: str, c: QuadrotorCriteria) -> list[tuple[str, boo
             )
         )
     return out
+
+
+def _ellipsoid_detail(quad: list) -> str:
+    """The closest pass in the collision ellipsoid's measure, where the runs report it
+    (``min_ellipsoid_separation``, >= 1: no downwash contact; ``ellipsoid_contact_steps``):
+    reported beside the separation criterion, which it does not change."""
+    if not quad or "min_ellipsoid_separation" not in quad[0]:
+        return ""
+    e = np.array([float(r["min_ellipsoid_separation"]) for r in quad])
+    hit = np.array([float(r["ellipsoid_contact_steps"]) for r in quad])
+    return (
+        f"; ellipsoid: min {np.min(e):.2f} (>= 1: no contact), contact in "
+        f"{int(np.count_nonzero(hit))}/{hit.size} runs, {int(hit.sum())} steps"
+    )
 
 
 def _attitude_cost_values(rows, name: str, quad: list) -> np.ndarray | None:

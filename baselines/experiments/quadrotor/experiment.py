@@ -67,6 +67,7 @@ from pairflock_env import make_config
 
 __all__ = [
     "CRITERIA",
+    "ELLIPSOID_COLUMNS",
     "PRESET",
     "SUMMARY_COLUMNS",
     "build_parser",
@@ -117,11 +118,23 @@ def _order(key: tuple[str, str]) -> tuple[int, int]:
     )
 
 
+#: with the collision ellipsoid (``collision_height``), after ``min_distance``
+ELLIPSOID_COLUMNS = (
+    ("min_ellipsoid_separation", "min ellipsoid separation (1)", "{:.2f}"),
+    ("ellipsoid_contact_steps", "ellipsoid contact steps", "{:.0f}"),
+)
+
+
 def summarize(rows: Sequence[dict[str, Any]]) -> str:
-    """Markdown table: median [min-max] over seeds per (vehicle model, policy)."""
+    """Markdown table: median [min-max] over seeds per (vehicle model, policy); the
+    ellipsoid's columns (:data:`ELLIPSOID_COLUMNS`) where the rows have them."""
+    columns = SUMMARY_COLUMNS
+    if rows and "min_ellipsoid_separation" in rows[0]:
+        at = 1 + [c[0] for c in columns].index("min_distance")
+        columns = (*columns[:at], *ELLIPSOID_COLUMNS, *columns[at:])
     return summary_table(
         rows,
-        SUMMARY_COLUMNS,
+        columns,
         lead=(("vehicle", "dynamics"), ("policy", "policy")),
         group=lambda r: (r["dynamics"], r["policy"]),
         sort=_order,

@@ -8,6 +8,12 @@ Per seed it measures (times in s, distances in m):
 * ``straight_max_error``: max |pair error| in straight flight, [15, 20], [27, 50], [57, 65];
 * ``turn_peak_error``: max |pair error| in and after the turns, [20, 27] and [50, 57];
 * ``min_distance``: smallest distance between any two UAVs (partners included) at any time;
+* with the config's collision ellipsoid (``collision_height`` set, as on the ``crazyflie``
+  preset), the same closest pass in the ellipsoid's measure: ``min_ellipsoid_separation``,
+  the smallest sqrt((dx^2 + dy^2) / collision_distance^2 + dz^2 / collision_height^2) over
+  any two UAVs at any time (>= 1: no two UAVs ever inside each other's downwash ellipsoid),
+  and ``ellipsoid_contact_steps``, the sampled states (one per control step, the start
+  included) with some pair inside it; from the same offsets as ``min_distance``;
 * ``velocity_mismatch``: max ||p_i - p_leader|| of the unpaired UAVs in [35, 50] and [60, 65]
   (the band and windows of ``paper-quadrotor``; another scenario's, e.g. the scaled
   ``crazyflie`` preset's, come from
@@ -104,9 +110,18 @@ class _Recorder:
     mismatch, quadrotor limits, and the attitude of one paired UAV of one swarm)."""
 
     def __init__(
-        self, B: int, T: int, pair: tuple[int, int], attitude_of: tuple[int, int] | None
+        self,
+        B: int,
+        T: int,
+        pair: tuple[int, int],
+        attitude_of: tuple[int, int] | None,
+        ellipsoid: tuple[float, float] | None = None,
     ) -> None:
         self.pair = pair
+        # (horizontal, vertical) radii of the collision ellipsoid, or None
+        self.ellipsoid = ellipsoid
+        self.ellipsoid_separation = np.full((B, T + 1), np.nan) if ellipsoid else None
+        self.ellipsoid_contacts = np.zeros(B, np.int64)
         self.pair_offset = np.full((B, T + 1), np.nan)
         self.min_distance = np.full((B, T + 1), np.nan)
         self.velocity_mismatch = np.full((B, T + 1), np.nan)
@@ -120,10 +135,18 @@ class _Recorder:
 
     def __call__(self, k: int, core, res, live: np.ndarray) -> None:
         q = core.q
-        d2 = np.sum((q[:, :, None, :] - q[:, None, :, :]) ** 2, axis=-1)
+        sq = (q[:, :, None, :] - q[:, None, :, :]) ** 2
+        d2 = np.sum(sq, axis=-1)
         N = q.shape[1]
         d2[:, np.arange(N), np.arange(N)] = np.inf
         self.min_distance[live, k] = np.sqrt(d2.min(axis=(1, 2)))[live]
+        if self.ellipsoid is not None:  # the same offsets in the ellipsoid's measure
+            h, v = self.ellipsoid
+            e2 = (sq[..., 0] + sq[..., 1]) / h**2 + sq[..., 2] / v**2
+            e2[:, np.arange(N), np.arange(N)] = np.inf
+            e = np.sqrt(e2.min(axis=(1, 2)))
+            self.ellipsoid_separation[live, k] = e[live]
+            self.ellipsoid_contacts[live] += e[live] < 1.0
         self.velocity_mismatch[live, k] = res.info["velocity_mismatch_max"][live]
         if core.config.safety_filter != "none":
             if self.filter_active is None:
@@ -148,6 +171,8 @@ class _Recorder:
         for b, e in enumerate(ended):
             for arr in (self.min_distance, self.velocity_mismatch, self.pair_offset):
                 arr[b, e + 1 :] = arr[b, e]
+            if self.ellipsoid_separation is not None:
+                self.ellipsoid_separation[b, e + 1 :] = self.ellipsoid_separation[b, e]
 
 
 def _rows(
@@ -166,6 +191,14 @@ def _rows(
             criteria=criteria,
         )
         steps = max(int(tr.ended[b]), 1)
+        if rec.ellipsoid_separation is not None:  # after min_distance, as its other measure
+            items = list(sm.items())
+            at = 1 + [key for key, _ in items].index("min_distance")
+            extra = (
+                ("min_ellipsoid_separation", float(rec.ellipsoid_separation[b].min())),
+                ("ellipsoid_contact_steps", int(rec.ellipsoid_contacts[b])),
+            )
+            sm = dict([*items[:at], *extra, *items[at:]])
         rows.append(
             {
                 "dynamics": dynamics,
@@ -201,7 +234,11 @@ def run_job(
     cfg = make_config(preset, dynamics=dynamics, **overrides)
     pol = make_pair_policy(policy, cfg, **gains.get(policy, {}))
     T = cfg.episode_steps
-    rec = _Recorder(len(seeds), T, cfg.pairs[0], (0, cfg.pairs[0][0]) if record else None)
+    attitude_of = (0, cfg.pairs[0][0]) if record else None
+    ellipsoid = None
+    if cfg.collision_height is not None:
+        ellipsoid = (cfg.collision_distance, cfg.collision_height)
+    rec = _Recorder(len(seeds), T, cfg.pairs[0], attitude_of, ellipsoid)
     kept = (0,) if record else ()
     t0 = time.perf_counter()
     tr = recorded_rollout(recording, cfg, pol, seeds, record_rows=kept, on_step=rec)

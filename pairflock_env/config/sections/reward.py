@@ -7,11 +7,11 @@ from typing import Any
 
 import numpy as np
 
-from pairflock_env.config.fields import Field, Flag, Real
+from pairflock_env.config.fields import Field, Flag, OrNone, Real
 from pairflock_env.config.limits import MAX_DISTANCE, MAX_STEP_PENALTY, MAX_WEIGHT
 from pairflock_env.config.schema import Derived, Rule, Section
 
-__all__ = ["DERIVED", "RULES", "SECTIONS", "largest_step_penalty"]
+__all__ = ["DERIVED", "RULES", "SECTIONS", "collision_ellipsoid", "largest_step_penalty"]
 
 _WEIGHT = Real(0.0, MAX_WEIGHT)
 
@@ -45,6 +45,30 @@ def _starts_diverged(v: Any) -> str | None:
             f"must exceed the largest start coordinate |swarm_center| + max(swarm_half_width, "
             f"pair_corner) = {extent:g} m, or every swarm is flagged diverged at reset"
         )
+    return None
+
+
+def collision_ellipsoid(v: Any) -> tuple[float, float] | None:
+    """The collision ellipsoid's squared horizontal radius and its squash (collision_distance /
+    collision_height)^2, or None for the sphere of radius ``collision_distance``: a pair with
+    offset (dx, dy, dz) collides when dx^2 + dy^2 + squash dz^2 < collision_distance^2."""
+    if v.collision_height is None:
+        return None
+    return v.collision_distance**2, (v.collision_distance / v.collision_height) ** 2
+
+
+def _height_covers_distance(v: Any) -> str | None:
+    if v.collision_height is not None and not v.collision_height >= v.collision_distance:
+        return (
+            f"must be None or >= collision_distance ({v.collision_distance:g} m): the ellipsoid "
+            "is taller than wide"
+        )
+    return None
+
+
+def _height_needs_3d(v: Any) -> str | None:
+    if v.collision_height is not None and v.dim != 3:
+        return f"must be None with dim={v.dim} (the ellipsoid's vertical axis needs dim=3)"
     return None
 
 
@@ -89,7 +113,20 @@ REWARD = Section(
             Real(0.0, MAX_DISTANCE),
             0.5,
             "m",
-            "Two UAVs closer than this count as a collision.",
+            "Two UAVs closer than this count as a collision (the horizontal radius of the "
+            "collision ellipsoid when collision_height is set).",
+        ),
+        Field(
+            "collision_height",
+            OrNone(Real(0.0, MAX_DISTANCE, lo_open=True), "a sphere of radius collision_distance"),
+            None,
+            "m",
+            "Vertical radius of the collision ellipsoid, as Crazyswarm measures downwash: two "
+            "UAVs count as a collision when (dx^2 + dy^2) / collision_distance^2 + dz^2 / "
+            "collision_height^2 < 1 (inter-centre offsets, z up). At least collision_distance; "
+            "needs dim=3. It changes the flocking pass's collision count (info collisions, "
+            "metric max_collisions); the reward's collision term and terminate_on_collision "
+            "keep the sphere (docs/crazyflie.md).",
         ),
         Field(
             "terminate_on_collision",
@@ -112,6 +149,12 @@ REWARD = Section(
 SECTIONS = (REWARD,)
 
 RULES = (
+    Rule(
+        ("collision_height", "collision_distance"),
+        _height_covers_distance,
+        "collision_height (when set) >= collision_distance",
+    ),
+    Rule(("collision_height", "dim"), _height_needs_3d, "collision_height (when set) needs dim=3"),
     Rule(
         ("divergence_limit", "swarm_center", "swarm_half_width", "pair_corner", "dim"),
         _starts_diverged,

@@ -309,7 +309,24 @@ def _swarm_radius_beyond(v: Any) -> str | None:
     return None
 
 
+def _sphere_holds_ellipsoid(v: Any) -> str | None:
+    h = v.collision_height
+    if v.safety_filter == "cbf" and h is not None and not v.safety_distance >= h:
+        return (
+            f"must keep safety_distance ({v.safety_distance:g} m) >= collision_height "
+            f'({h:g} m) with safety_filter="cbf": the filter keeps a sphere of radius '
+            "safety_distance, which holds the collision ellipsoid only when it is at least "
+            "as tall (docs/crazyflie.md); unset collision_height for a smaller sphere"
+        )
+    return None
+
+
 RULES = (
+    Rule(
+        ("safety_distance", "collision_height", "safety_filter"),
+        _sphere_holds_ellipsoid,
+        'safety_distance >= collision_height (when set) with safety_filter="cbf"',
+    ),
     Rule(
         ("safety_brake_accel", "pair_accel_limit"),
         _brake_within_limit,

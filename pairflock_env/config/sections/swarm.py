@@ -49,7 +49,8 @@ SWARM = Section(
             "auto",
             "",
             'How each step finds neighbours: "all_pairs" (every pair, O(N^2) per swarm), '
-            '"grid" (a uniform cell list with cells of max(radius, collision_distance), O(N) '
+            '"grid" (a uniform cell list with cells of max(radius, collision_distance, '
+            "collision_height), O(N) "
             'for a flock of bounded density) or "auto" (all pairs up to '
             f"{GRID_MIN_UAVS - 1} UAVs, the grid from {GRID_MIN_UAVS}: the faster one, "
             "measured). Both give the same trajectories.",
