@@ -140,6 +140,7 @@ RECORDS = (
     "reproduction.md",
     "benchmark.md",
     "safety-results.md",
+    "swarm-safety-results.md",
     "learning-results.md",
     "crazyflie-results.md",
     "speed.md",
