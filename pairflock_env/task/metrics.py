@@ -45,7 +45,10 @@ METRIC_DOCS: dict[str, tuple[str, str]] = {
     "peak_speed": ("m/s", "largest speed of either member"),
     "final_largest_component": ("UAVs", "largest connected component of the swarm at the end"),
     "final_velocity_mismatch": ("m/s", "mean ||p_i - p_leader|| of unpaired UAVs at the end"),
-    "max_collisions": ("pairs", "most UAV pairs closer than collision_distance at one time"),
+    "max_collisions": (
+        "pairs",
+        "most UAV pairs in collision at one time (collision_distance, collision_height)",
+    ),
 }
 
 
