@@ -55,6 +55,13 @@ def test_run_outcomes_are_what_the_set_check_decides_on():
     assert run_outcomes(rows, "proportional") == {}
 
 
+def test_a_run_cut_short_fails_no_crash_even_when_it_is_the_first():
+    rows = _runs(set(), set(), seeds=range(3))
+    rows[0]["steps_run"] = 4  # seed 0's quadrotor run ended early
+    ok = run_outcomes(rows, "smc")
+    assert ok["no_crash"].tolist() == [False, True, True]
+
+
 def test_exact_mcnemar_matches_scipy():
     for a in range(0, 25, 3):
         for b in range(0, 25, 4):

@@ -172,7 +172,9 @@ def run_outcomes(
     def arr(key: str) -> np.ndarray:
         return np.array([float(r[key]) for r in quad])
 
-    full = arr("steps_run") == float(quad[0]["steps_run"])
+    # a run is full when it ran as long as the longest run of the experiment (an episode
+    # ends early only when a swarm crashes or diverges; the particle runs never crash)
+    full = arr("steps_run") == max(float(r["steps_run"]) for r in rows)
     out = {
         "seed": np.array([int(float(r["seed"])) for r in quad]),
         "band_entry": arr("band_entry_time") <= c.band_entry_by,
