@@ -195,7 +195,11 @@ def test_ctrl_c_inside_a_step_flushes(tmp_path, monkeypatch):
 
 _CHILD = textwrap.dedent(
     """
+    import signal
     import sys
+    # Ctrl-C raises KeyboardInterrupt even where this test runs in the background (a shell
+    # starts background jobs with SIGINT ignored, and the child would inherit that)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     import numpy as np
     import pairflock_env as pf
     from pairflock_env.envs.record import RecordEpisode
