@@ -21,7 +21,10 @@ from baselines.experiments.safety.nearest import nearest_figure, nearest_series
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.config.sections.flocking import repulsion_floor, repulsion_peak
 from pairflock_env.safety import SafetyParams, SwarmFilter
-from pairflock_env.safety.cbf.kernels import _sigma_min
+from pairflock_env.safety.cbf.kernels import _far_radius, _sigma_min
+from pairflock_env.safety.cbf.search import FIT_ROWS, search_radius, velocity_field
+from pairflock_env.safety.cbf.swarm_kernels import SWARM as SWARM_PARAMS
+from pairflock_env.safety.cbf.swarm_kernels import _far_of
 from pairflock_env.swarm.flocking import FLOCKING, flocking_params
 from pairflock_env.swarm.grid import NeighborGrid
 from pairflock_env.task.infos import SAFETY_SWARM_INFO_KEYS
@@ -191,6 +194,81 @@ def test_the_grid_gives_the_scan_bit_for_bit(D, limit):
     assert scan.active.any()
 
 
+def _contracting_state(rng, B, N, D, box=60.0, rate=1.5, drift=40.0, noise=0.3):
+    """A flock closing on its centre as the swarm does after a spread reset: each UAV
+    fast relative to the mean (rate x its offset), but nearly at its neighbours' speed."""
+    q, _ = _random_state(rng, B, N, D, box=box, speed=0.0, spacing=1.5)
+    v0 = rng.normal(0.0, drift, (B, 1, D))
+    p = v0 - rate * (q - q.mean(1, keepdims=True)) + rng.normal(0.0, noise, q.shape)
+    p[:, 3] += 12.0  # one fast UAV: its own residual is large
+    return q, p
+
+
+@pytest.mark.parametrize("D", [2, 3])
+def test_the_velocity_field_bounds_every_relative_speed(D):
+    """|p_i - p_j| <= k |q_i - q_j| + e_i + e_j + pad for every pair, with k, e from the
+    affine fit; an exactly affine flock has residuals near zero."""
+    rng = np.random.default_rng(40 + D)
+    N = 200
+    q, p = _contracting_state(rng, 1, N, D)
+    fit, res = np.zeros((FIT_ROWS, 3)), np.zeros(N)
+    paired = np.zeros(N, np.bool_)
+    kn, eo, pad = velocity_field(q, p, 0, paired, fit, res)
+    assert 0 < kn < 3.0 and np.isclose(eo, res.max())
+    dq = np.linalg.norm(q[0, :, None] - q[0, None], axis=-1)
+    dv = np.linalg.norm(p[0, :, None] - p[0, None], axis=-1)
+    assert (dv <= kn * dq + res[:, None] + res[None] + 2 * pad).all()
+    assert np.median(res) < 2.0 < np.median(np.linalg.norm(p[0] - p[0].mean(0), axis=1))
+    K = rng.normal(0.0, 0.5, (D, D))
+    exact = 3.0 + (q - q.mean(1, keepdims=True)) @ K.T
+    velocity_field(q, exact, 0, paired, fit, res)
+    assert res.max() < 1e-6  # the regulariser (1e-9 of the trace) and rounding
+    p[0, 7, 0] = np.nan
+    assert velocity_field(q, p, 0, paired, fit, res) == (np.inf, np.inf, np.inf)
+
+
+def test_the_search_radius_leaves_out_only_what_the_skip_drops():
+    """far_radius(k d + c) <= d for every d between the search radius and R (a fine sweep),
+    and the radius is no larger than the plain bound at speed k R + c."""
+    P = SafetyParams(accel_limit=100.0)
+    filt = _filter(P, [0, 1], 10, [1, 0])
+    far = _far_of(filt._pr, 16.0, 16.0, 20.0, 0.0, 20.0, 20.0)
+    for kn, c, R in ((0.0, 3.0, 100.0), (0.2, 5.0, 100.0), (1.0, 1.0, 50.0), (0.05, 40.0, 100.0)):
+        r = search_radius(far, kn, c, R)
+        assert _far_radius(c, far) <= r <= R
+        d = np.linspace(r, R, 4001)
+        assert all(_far_radius(kn * x + c, far) <= x for x in d)
+        if r < R:  # and no shorter radius would do (to the bisection's tolerance)
+            x = r * (1 - 2e-3)
+            assert _far_radius(kn * x + c, far) > x
+
+
+@pytest.mark.parametrize("D", [2, 3])
+def test_the_shortened_searches_miss_no_row(D):
+    """The search radii from the velocity field, the radius table and the grid ladder drop
+    only UAVs the far-UAV skip drops: the same commands and flags as every UAV in range
+    evaluated, on the scan, one grid and a ladder of three."""
+    rng = np.random.default_rng(50 + D)
+    B, N = 3, 250
+    P = SafetyParams(accel_limit=80.0)
+    args = (P, [0, 1, 6, 9], N, [1, 0, 9, 6])
+    kw = dict(accel_limit=20.0, brake_accel=16.0, swarm_radius=100.0)
+    filt, every = SwarmFilter(*args, **kw), SwarmFilter(*args, **kw)
+    every._pr[SWARM_PARAMS.index.skip_far] = 0.0
+    q, p = _contracting_state(rng, B, N, D)
+    f = rng.normal(0.0, 10.0, q.shape)
+    a_nom = f + rng.normal(0.0, 30.0, q.shape)
+    ref = every.apply(q, p, a_nom, f)
+    assert ref.active.sum() >= 10
+    ladder = [NeighborGrid(B, N, D, cell_size=h).build(q) for h in (2.0, 8.0, 32.0)]
+    for grid in (None, ladder[0], ladder):
+        out = filt.apply(q, p, a_nom, f, grid=grid)
+        for x, y in zip(ref.arrays()[:5], out.arrays()[:5], strict=True):
+            assert np.array_equal(x, y)
+    with pytest.raises(ValueError, match="fine to coarse"):
+        filt.apply(q, p, a_nom, f, grid=ladder[::-1])
+
+
 def test_core_on_the_grid_flies_the_all_pairs_trajectories():
     kw = dict(n_uavs=60, init="random", pairs=((0, 1), (2, 3)), **SWARM)
     runs = []
@@ -226,6 +304,18 @@ COMMITTED = {
         "4f3f740d395c1757cbeeb21b88d65e8564bf0df14288ed3434a0f947396d6817",
     ),
 }
+#: the same digests of the swarm layer, taken from the commit before its searches were
+#: shortened by the velocity field and the grid ladder (a81a625)
+COMMITTED_SWARM = {
+    "paper_n50_random_swarm": (
+        dict(preset="paper", n_uavs=50, init="random", **SWARM),
+        "5b26ff18df004677815fbeae9341d6a6beb89f100d4191e946c5a40032266e7e",
+    ),
+    "large_n400_swarm": (
+        dict(steps=200, seeds=(3,), preset="large", n_uavs=400, **SWARM),
+        "4afdf2f18c3da57588892ed3d902dbbb9cd33c556c4d8ec5695070618b4d0fc9",
+    ),
+}
 
 
 def _digest(steps=300, seeds=(3, 4), preset="paper", **kw):
@@ -251,6 +341,13 @@ def test_the_pairs_scope_flies_as_committed(name):
     if name == "paper_n20_corners_cbf":
         extra = dict(safety_scope="pairs", swarm_accel_limit=5.0, swarm_repulsion_floor=True)
         assert _digest(**kw, **extra) == digest
+
+
+@pytest.mark.parametrize("name", COMMITTED_SWARM)
+def test_the_swarm_scope_flies_as_committed(name):
+    """The searches' shortcuts change no bit of the layer's flights."""
+    kw, digest = COMMITTED_SWARM[name]
+    assert _digest(**kw) == digest
 
 
 # ------------------------------------------------------------------- the repulsion floor

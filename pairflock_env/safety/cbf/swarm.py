@@ -26,6 +26,8 @@ their row alone (:mod:`.swarm_kernels`). An unpaired UAV's whole command lies in
 from __future__ import annotations
 
 import dataclasses
+import itertools
+from collections.abc import Sequence
 
 import numpy as np
 import numpy.typing as npt
@@ -33,6 +35,7 @@ import numpy.typing as npt
 from pairflock_env.safety.cbf.barrier import SafetyFilter, grid_arrays
 from pairflock_env.safety.cbf.kernels import WS_ADD, WS_MAX
 from pairflock_env.safety.cbf.params import SafetyParams
+from pairflock_env.safety.cbf.search import FIT_ROWS, RADIUS_LEVELS
 from pairflock_env.safety.cbf.swarm_kernels import SWARM, VEC_ROWS, swarm_kernel
 from pairflock_env.swarm.grid import NeighborGrid
 
@@ -156,6 +159,9 @@ class SwarmFilter:
             np.zeros((N, 3)),
             np.zeros(N),
             np.zeros((VEC_ROWS, 3)),
+            np.zeros((FIT_ROWS, 3)),
+            np.zeros(N),
+            np.zeros(RADIUS_LEVELS + 1),
         )
         self._solver = (np.zeros((4, 4, 4)), np.zeros(5, np.int64), np.zeros((K, 3)),
                         np.zeros(K), np.zeros(K, np.int64), np.zeros(N))  # fmt: skip
@@ -171,7 +177,7 @@ class SwarmFilter:
         a_nom: npt.ArrayLike,
         flock_accel: npt.ArrayLike,
         out: SwarmOutput | None = None,
-        grid: NeighborGrid | None = None,
+        grid: NeighborGrid | Sequence[NeighborGrid] | None = None,
     ) -> SwarmOutput:
         """Filter the nominal whole command of every UAV of every swarm.
 
@@ -182,8 +188,9 @@ class SwarmFilter:
                 own).
             out: arrays to fill (from :meth:`allocate`); new ones when None.
             grid: optional :class:`~pairflock_env.swarm.grid.NeighborGrid` built from these
-                ``q`` (any cell size): the searches then use it, with the same result bit for
-                bit as scanning all N.
+                ``q`` (any cell size), or a ladder of up to three such grids, finest first:
+                each search then uses the finest grid whose cells are at least a third of
+                its radius, with the same result bit for bit as scanning all N.
         """
         check = SafetyFilter._array
         q, p = check("q", q, None), check("p", p, None)
@@ -200,7 +207,13 @@ class SwarmFilter:
             out = self.allocate(B, D)
         elif out.a.shape != q.shape:
             raise ValueError(f"out.a has shape {out.a.shape}, expected {q.shape}")
-        g = grid_arrays(grid, q)
-        swarm_kernel(q, p, a_nom, f, self._ints, self._reals, self._pr, grid is not None, g,
-                     out.arrays(), self._work, self._solver)  # fmt: skip
+        ladder = [] if grid is None else [grid] if isinstance(grid, NeighborGrid) else list(grid)
+        if not 1 <= len(ladder) <= 3 and grid is not None:
+            raise ValueError(f"grid has {len(ladder)} grids; expected a NeighborGrid or 1-3")
+        gs = [grid_arrays(g, q) for g in ladder] or [grid_arrays(None, q)]
+        if any(b.h < a.h for a, b in itertools.pairwise(gs)):
+            raise ValueError("grid is invalid: a ladder of grids must go from fine to coarse")
+        gs += [gs[-1]] * (3 - len(gs))
+        swarm_kernel(q, p, a_nom, f, self._ints, self._reals, self._pr, grid is not None,
+                     tuple(gs), out.arrays(), self._work, self._solver)  # fmt: skip
         return out

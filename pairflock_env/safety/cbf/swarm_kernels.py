@@ -21,8 +21,9 @@ sides cannot make it infeasible.
 
 Two unpaired UAVs sense each other within ``swarm_radius2``, a pair of UAVs of which one is
 paired within ``pair_radius2`` (a partner at any distance): both sides of a pair see the same
-rows. Each search is shortened to where the far-UAV skip would drop every UAV at the
-swarm's speeds (relative to its mean velocity). Where the rows with paired UAVs are shared,
+rows. Each search is shortened to where the far-UAV skip would drop every UAV, under a
+bound on relative speeds fitted to the swarm's velocity field, and uses the grid of a ladder
+that suits its radius (:mod:`.search`). Where the rows with paired UAVs are shared,
 an unpaired UAV's paired candidates come from a contact list that each paired UAV fills with
 one search, so a swarm costs O(N + M k), not O(N M).
 
@@ -39,16 +40,22 @@ import numpy as np
 from pairflock_env.kernels import KernelParams, jit_inline, jit_kernel
 from pairflock_env.safety.cbf.kernels import (
     STATUS_INFEASIBLE,
+    STATUS_PROJECTED,
     WS_MAX,
     _constrain_one,
     _far_constants,
-    _far_radius,
     _grid_usable,
     _margin,
     _put,
     _solve_ws,
 )
-from pairflock_env.swarm.grid import within_radius
+from pairflock_env.safety.cbf.search import (
+    candidates,
+    radius_table,
+    shortened,
+    tabulated,
+    velocity_field,
+)
 
 __all__ = ["SWARM", "VEC_ROWS", "swarm_kernel"]
 
@@ -74,9 +81,9 @@ SWARM = KernelParams(
 _S = SWARM.index
 
 #: rows of the (VEC_ROWS, 3) float scratch: a query point, UAV i's centre c_i, the solver's
-#: candidate and best point, x_nom, x, a row's normal, the swarm's mean velocity
-_PT, _CTR, _CAND, _BEST, _XIN, _XOUT, _NV, _CBAR = range(8)
-VEC_ROWS = 8
+#: candidate and best point, x_nom, x, a row's normal
+_PT, _CTR, _CAND, _BEST, _XIN, _XOUT, _NV = range(7)
+VEC_ROWS = 7
 #: relative pad of the drop threshold S over the rounding of (U + |c|) (alpha_ij / alpha_i)
 _S_PAD = 1e-12
 
@@ -139,85 +146,28 @@ def _abounds(f, b, paired, bound, abound):
 
 
 @jit_kernel
-def _speeds(p, b, paired, cbar):
-    """The swarm's mean velocity into ``cbar``; returns vo, the largest |p_j - cbar| of its
-    unpaired UAVs (with a UAV's own, it bounds a relative speed; inf if a velocity is not
-    finite), and the pad for their rounding, 1e-9 |cbar|."""
-    N, D = p.shape[1], p.shape[2]
-    for k in range(3):
-        cbar[k] = 0.0
-    for j in range(N):
-        for k in range(D):
-            cbar[k] += p[b, j, k]
-    c2 = 0.0
-    for k in range(D):
-        cbar[k] /= N
-        c2 += cbar[k] * cbar[k]
-    vo = 0.0
-    for j in range(N):
-        s2 = 0.0
-        for k in range(D):
-            s2 += (p[b, j, k] - cbar[k]) ** 2
-        if not np.isfinite(s2):
-            return np.inf, np.inf
-        if not paired[j]:
-            vo = max(vo, s2)
-    return np.sqrt(vo), 1e-9 * np.sqrt(c2)
-
-
-@jit_inline
-def _own_speed(p, b, i, cbar):
-    """|p_i - cbar|."""
-    s2 = 0.0
-    for k in range(p.shape[2]):
-        s2 += (p[b, i, k] - cbar[k]) ** 2
-    return np.sqrt(s2)
-
-
-@jit_inline
-def _candidates(q, b, pt, r2, exclude, use_grid, g, hits):
-    """The UAVs of swarm b closer than sqrt(r2) to ``pt`` (``exclude`` left out) into
-    ``hits``, in increasing index, from the grid or a scan of all N; returns their count."""
-    if use_grid:
-        return within_radius(q, b, pt, r2, exclude, g, hits)
-    n = 0
-    for j in range(q.shape[1]):
-        d2 = 0.0
-        for k in range(q.shape[2]):
-            x = q[b, j, k] - pt[k]
-            d2 += x * x
-        if j != exclude and d2 < r2:
-            hits[n] = j
-            n += 1
-    return n
-
-
-@jit_kernel
-def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, use_grid, g, hits, vec,
-              far_up, a_u, Au, spd, cstart, cnt, clist):  # fmt: skip
+def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, use_grid, gs, hits, vec,
+              far_up, a_u, Au, fld, res, cstart, cnt, clist):  # fmt: skip
     """For every unpaired UAV i, the paired UAVs j close enough for the row of (i, j) to
     bind from either side, in agent order, as clist[cstart[i]:cstart[i + 1]]: each paired
-    UAV searches once, out to the larger far radius of both sides (j's, and ``far_up``, an
-    unpaired UAV's against a paired one; at most the pairs' sensing radius) at relative
-    speed |p_j - cbar| + vo. ``spd`` = (vo, pad)."""
+    UAV searches once, out to the larger search radius of both sides (j's, and ``far_up``,
+    an unpaired UAV's against a paired one; at most the pairs' sensing radius) under the
+    relative-speed bound of :func:`~.search.velocity_field` (``fld``, ``res``)."""
     N, D = q.shape[1], q.shape[2]
-    vo, pad = spd
-    cbar, pt = vec[_CBAR], vec[_PT]
+    pt = vec[_PT]
     for i in range(N + 1):
         cstart[i] = 0
     for fill in range(2):  # count, then fill
         for m in range(agents.shape[0]):
             j = agents[m]
             cn = abound[j] - bound[j]
-            W = (_own_speed(p, b, j, cbar) + vo) * (1.0 + 1e-9) + pad
             far_j = _far_of(pr, alpha[j], a_u, bound[j], cn, abound[j], Au)
-            r = max(_far_radius(W, far_j), _far_radius(W, far_up))
             r2 = pr[_S.pair_radius2]
             if pr[_S.skip_far] != 0.0:
-                r2 = min(r2, r * r)
+                r2 = max(shortened(r2, far_j, fld, res[j]), shortened(r2, far_up, fld, res[j]))
             for k in range(D):
                 pt[k] = q[b, j, k]
-            nh = _candidates(q, b, pt, r2, j, use_grid, g, hits)
+            nh = candidates(q, b, pt, r2, j, use_grid, gs, hits)
             for t in range(nh):
                 i = hits[t]
                 if paired[i]:
@@ -234,30 +184,24 @@ def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, use_grid, g, hi
 
 
 @jit_inline
-def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, use_grid, g, hits, vec, spd, G, rhs):
-    """UAV i's rows into G, rhs: the unpaired UAVs within its shortened radius, then the
-    paired ones (every agent, for a paired i; its contact list, for an unpaired one unless
-    the paired UAVs take those rows alone). ``far_u`` / ``far_p``: i's far constants
-    against the two classes; ``ints`` = (paired, mate, agents, coop_u, coop_p, cstart,
-    clist), coop_* telling, for an unpaired and for a paired i, which UAVs share its rows;
-    ``spd`` = (vo, pad). Returns (K, min H, ok)."""
+def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, r2, use_grid, gs, hits, vec, G, rhs):
+    """UAV i's rows into G, rhs: the unpaired UAVs within its (shortened) squared search
+    radius r2, then the paired ones (every agent, for a paired i; its contact list, for an
+    unpaired one unless the paired UAVs take those rows alone). ``far_u`` / ``far_p``: i's
+    far constants against the two classes; ``ints`` = (paired, mate, agents, coop_u,
+    coop_p, cstart, clist), coop_* telling, for an unpaired and for a paired i, which UAVs
+    share its rows. Returns (K, min H, ok)."""
     paired, mate, agents, coop_u, coop_p, cstart, clist = ints
-    vo, pad = spd
     D = q.shape[2]
     Ds, T, c, lam = pr[_S.barrier_distance], pr[_S.dt], pr[_S.position_gain], pr[_S.decay]
     tau, prune, A_o = pr[_S.reaction_time], pr[_S.skip_far] != 0.0, pr[_S.other_accel]
     R2p = pr[_S.pair_radius2]
     Rs2 = max(R2p, pr[_S.swarm_radius2])
-    r2 = R2p if paired[i] else pr[_S.swarm_radius2]
     coop = coop_p if paired[i] else coop_u
-    if prune:  # out to where the skip drops every unpaired UAV (W: a relative speed bound)
-        W = (_own_speed(p, b, i, vec[_CBAR]) + vo) * (1.0 + 1e-9) + pad
-        r = _far_radius(W, far_u)
-        r2 = min(r2, r * r)
     pt = vec[_PT]
     for k in range(D):
         pt[k] = q[b, i, k]
-    nh = _candidates(q, b, pt, r2, i, use_grid, g, hits)
+    nh = candidates(q, b, pt, r2, i, use_grid, gs, hits)
     K, hmin, ctr, nv = 0, np.inf, vec[_CTR], vec[_NV]
     for t in range(nh):
         j = hits[t]
@@ -299,6 +243,11 @@ def _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver):
     if K == 0 and n2 <= U * U:  # nothing binds: the nominal (what the solver returns too)
         _put(xout, xin, D)
         return False, 0
+    if K == 0:  # only the ball: the solver's radial projection, the same operations
+        rho, dist = np.sqrt(max(U * U - 0.0, 0.0)), np.sqrt(max(n2 - 0.0, 0.0))
+        for k in range(D):
+            xout[k] = 0.0 + (rho / dist) * (xin[k] - 0.0)
+        return False, STATUS_PROJECTED
     violated = _margin(G, rhs, K, D, xin) < 0.0
     cand, best = vec[_CAND], vec[_BEST]
     status, _ = _solve_ws(xin, G, rhs, K, U, D, W, idx, cand, best, xout, Gw, bw, ws, marg, WS_MAX)
@@ -306,17 +255,17 @@ def _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver):
 
 
 @jit_kernel
-def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, g, outs, work, solver):
+def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, solver):
     """Every UAV of swarm b (see :func:`swarm_kernel` for the arguments)."""
     paired, mate, agents, coop_u, coop_p, slot = ints
     alpha, bound, abound = reals
     a_out, u_out, active, corr, infeas, hmin = outs
-    hits, cstart, cnt, clist, G, rhs, vec = work
+    hits, cstart, cnt, clist, G, rhs, vec, fit, res, table = work
     D = q.shape[2]
-    grid = use_grid and _grid_usable(q, p, b, g)
+    grid = use_grid and _grid_usable(q, p, b, gs[0])
     a_u, U_u, a_p = _class_values(paired, alpha, bound)
     Au, Ap = _abounds(f, b, paired, bound, abound)
-    spd = _speeds(p, b, paired, vec[_CBAR])
+    fld = velocity_field(q, p, b, paired, fit, res)
     alone = pr[_S.pair_alone] != 0.0
     far_uu = _far_of(pr, a_u, a_u, U_u, 0.0, Au, Au)
     far_up = _far_of(pr, a_u, a_p, U_u, 0.0, Au, Ap)
@@ -324,9 +273,11 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, g, outs, work, s
         for i in range(q.shape[1] + 1):
             cstart[i] = 0
     else:
-        _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, grid, g, hits, vec,
-                  far_up, a_u, Au, spd, cstart, cnt, clist)  # fmt: skip
+        _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, grid, gs, hits, vec,
+                  far_up, a_u, Au, fld, res, cstart, cnt, clist)  # fmt: skip
     rows = (paired, mate, agents, coop_u, coop_p, cstart, clist)
+    prune = pr[_S.skip_far] != 0.0
+    de = radius_table(pr[_S.swarm_radius2], far_uu, fld, table) if prune else 0.0
     ctr = vec[_CTR]
     for i in range(q.shape[1]):
         U = bound[i]
@@ -340,7 +291,14 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, g, outs, work, s
             else:
                 far_u = _far_of(pr, alpha[i], a_u, U, cn, abound[i], Au)
             far_p = _far_of(pr, alpha[i], a_p, U, cn, abound[i], Ap)
-        K, h, ok = _uav_rows(q, p, b, i, rows, pr, far_u, far_p, U, grid, g, hits, vec, spd, G, rhs)
+        # out to where the skip drops every unpaired UAV
+        if paired[i]:
+            r2 = pr[_S.pair_radius2]
+            if prune:
+                r2 = shortened(r2, far_u, fld, res[i])
+        else:
+            r2 = tabulated(table, de, res[i]) if prune else pr[_S.swarm_radius2]
+        K, h, ok = _uav_rows(q, p, b, i, rows, pr, far_u, far_p, U, r2, grid, gs, hits, vec, G, rhs)
         violated, status = _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver)
         hmin[b, i] = h
         x, xin = vec[_XOUT], vec[_XIN]
@@ -356,7 +314,7 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, g, outs, work, s
 
 
 @jit_kernel
-def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, g, outs, work, solver):
+def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, gs, outs, work, solver):
     """The swarm layer over every swarm: each UAV's filtered whole command.
 
     Args:
@@ -366,12 +324,13 @@ def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, g, outs, work, solve
             coop_p (N,) the UAVs that share a paired UAV's rows (all, or with ``pair_alone``
             the paired ones), slot (N,) each UAV's agent column or -1).
         reals: (alpha (N,) brake, bound (N,) U_i, abound (N,) scratch).
-        pr: :data:`SWARM` vector; use_grid, g: a grid of q (GridArrays) to search, or not.
+        pr: :data:`SWARM` vector; use_grid, gs: three grids of q (GridArrays, fine to coarse;
+            the same grid thrice is valid) to search, or not.
         outs: (a_out (B, N, dim), u_out (B, M, dim) the agents' x, active, correction,
             infeasible, barrier (B, N)).
         work: (hits (N + 1,), cstart (N + 1,), cnt (N,), clist (N M,), G (N, 3), rhs (N,),
-            vec (VEC_ROWS, 3)).  solver: (W (4, 4, 4), idx (5,), Gw, bw, ws, marg) of
-            :func:`~.kernels._solve_ws`.
+            vec (VEC_ROWS, 3), fit (FIT_ROWS, 3), res (N,), table (RADIUS_LEVELS + 1,)).
+        solver: (W (4, 4, 4), idx (5,), Gw, bw, ws, marg) of :func:`~.kernels._solve_ws`.
     """
     for b in range(q.shape[0]):
-        _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, g, outs, work, solver)
+        _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, solver)

@@ -1,0 +1,242 @@
+"""How far each UAV of the swarm layer searches (docs/swarm-safety.md, "Speed"): a bound
+on every relative speed from an affine fit of the swarm's velocities, the search radius it
+gives, tabulated per step, and the grid of a ladder each search uses.
+
+The far-UAV skip (:func:`~.kernels._far`) drops a UAV j whose barrier row cannot bind at
+its distance and relative speed. A search that stops where the skip would drop every UAV
+gives the same rows as one over the whole sensing radius. Bounding every relative speed by
+the swarm's largest speed relative to its mean is safe but loose while a spread flock
+contracts: each UAV is then fast relative to the mean but nearly at its neighbours' speed,
+and searches reached 100 m. The affine fit keeps what neighbours share.
+
+numba's on-disk cache keys a compiled function on its own file only: after editing this
+module, clear the numba cache (the ``__pycache__`` folders) before trusting a run.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pairflock_env.kernels import jit_inline, jit_kernel
+from pairflock_env.safety.cbf.kernels import _far_radius
+from pairflock_env.swarm.grid import within_radius
+
+__all__ = [
+    "FIT_ROWS",
+    "RADIUS_LEVELS",
+    "candidates",
+    "radius_table",
+    "search_radius",
+    "shortened",
+    "tabulated",
+    "velocity_field",
+]
+
+#: rows of the (FIT_ROWS, 3) scratch of :func:`velocity_field`: the mean velocity and mean
+#: position, then three rows each of the fitted gradient K and of the two sums
+_CBAR, _QBAR, _K0, _C0, _P0 = 0, 1, 2, 5, 8
+FIT_ROWS = 11
+#: the search radius is sought to this relative width (it need not be tight, only safe)
+_RADIUS_TOL = 1e-3
+
+
+@jit_kernel
+def velocity_field(q, p, b, paired, fit, res):
+    """A bound on every relative speed of swarm b from an affine fit of its velocities.
+
+    Fits p_j ~ cbar + K (q_j - qbar) by least squares (cbar, qbar: the mean velocity and
+    position, and K, into ``fit``, (FIT_ROWS, 3) scratch), and writes each UAV's residual
+    e_j = |p_j - cbar - K (q_j - qbar)| into ``res``. For any two UAVs then
+
+        |p_i - p_j| <= k |q_i - q_j| + e_i + e_j,   k >= ||K||_2,
+
+    whatever K is (the fit only makes the bound tight: a flock contracting towards its
+    leader moves fast relative to its mean, but its neighbours move alike). Returns (k, eo,
+    pad): eo the largest residual of an unpaired UAV, pad a bound on the rounding of a
+    residual. (inf, inf, inf) when a position or a velocity is not finite."""
+    N, D = q.shape[1], q.shape[2]
+    cbar, qbar = fit[_CBAR], fit[_QBAR]
+    for k in range(3):
+        cbar[k] = 0.0
+        qbar[k] = 0.0
+    for j in range(N):
+        for k in range(D):
+            cbar[k] += p[b, j, k]
+            qbar[k] += q[b, j, k]
+    for k in range(D):
+        cbar[k] /= N
+        qbar[k] /= N
+    # the normal equations K Cqq = Cpq, with Cqq lightly regularised (any K is valid)
+    C, P = fit[_C0 : _C0 + 3], fit[_P0 : _P0 + 3]
+    for r in range(3):
+        for s in range(3):
+            C[r, s] = 0.0
+            P[r, s] = 0.0
+    for j in range(N):
+        for r in range(D):
+            x = q[b, j, r] - qbar[r]
+            for s in range(D):
+                C[r, s] += x * (q[b, j, s] - qbar[s])
+                P[r, s] += (p[b, j, r] - cbar[r]) * (q[b, j, s] - qbar[s])
+    tr = 0.0
+    for r in range(D):
+        tr += C[r, r]
+    ok = np.isfinite(tr)
+    for r in range(D):
+        for s in range(D):
+            ok = ok and np.isfinite(P[r, s])
+    if not ok:
+        return np.inf, np.inf, np.inf
+    for r in range(D):
+        C[r, r] += 1e-9 * tr + 1e-300
+    _solve_gradient(C, P, D, fit)
+    # k: the smaller of the Frobenius norm and sqrt(||K||_1 ||K||_inf), both >= ||K||_2
+    fro, n1, ninf = 0.0, 0.0, 0.0
+    for r in range(D):
+        row, col = 0.0, 0.0
+        for s in range(D):
+            fro += fit[_K0 + r, s] ** 2
+            row += abs(fit[_K0 + r, s])
+            col += abs(fit[_K0 + s, r])
+        ninf, n1 = max(ninf, row), max(n1, col)
+    kn = min(np.sqrt(fro), np.sqrt(n1 * ninf))
+    if not np.isfinite(kn):  # a degenerate fit: the plain ball around cbar
+        kn = 0.0
+        for r in range(D):
+            for s in range(D):
+                fit[_K0 + r, s] = 0.0
+    eo, vmax, xmax = 0.0, 0.0, 0.0
+    for j in range(N):
+        e2, v2, x2 = 0.0, 0.0, 0.0
+        for r in range(D):
+            e = p[b, j, r] - cbar[r]
+            for s in range(D):
+                e -= fit[_K0 + r, s] * (q[b, j, s] - qbar[s])
+            e2 += e * e
+            v2 += p[b, j, r] * p[b, j, r]
+            x2 += q[b, j, r] * q[b, j, r]
+        res[j] = np.sqrt(e2)
+        vmax, xmax = max(vmax, v2), max(xmax, x2)
+        if not paired[j]:
+            eo = max(eo, res[j])
+    c2, m2 = 0.0, 0.0
+    for r in range(D):
+        c2 += cbar[r] * cbar[r]
+        m2 += qbar[r] * qbar[r]
+    scale = np.sqrt(vmax) + np.sqrt(c2) + kn * (np.sqrt(xmax) + np.sqrt(m2))
+    return kn, eo, 1e-9 * scale
+
+
+@jit_inline
+def _solve_gradient(C, P, D, fit):
+    """K = P C^-1 into fit[_K0:_K0 + D] (C symmetric positive definite, D <= 3): Gaussian
+    elimination of C K^T = P^T, one right-hand side per row of K."""
+    for r in range(D):
+        for s in range(D):
+            fit[_K0 + r, s] = P[r, s]
+    for c in range(D):  # forward elimination on C and on every row of K alike
+        piv = C[c, c]
+        for r in range(c + 1, D):
+            f = C[r, c] / piv
+            for s in range(c, D):
+                C[r, s] -= f * C[c, s]
+            for m in range(D):
+                fit[_K0 + m, r] -= f * fit[_K0 + m, c]
+    for c in range(D - 1, -1, -1):
+        for m in range(D):
+            v = fit[_K0 + m, c]
+            for s in range(c + 1, D):
+                v -= C[c, s] * fit[_K0 + m, s]
+            fit[_K0 + m, c] = v / C[c, c]
+
+
+@jit_inline
+def search_radius(far, kn, c, R):
+    """How far UAV i must search for rows of this kind: the smallest r <= R such that the
+    far-UAV skip drops every UAV j at a distance d in [r, R] whose relative speed is at
+    most kn d + c (:func:`velocity_field`; c = e_i + e_j's bound, padded). With
+    g(d) = far_radius(kn d + c) - d, convex in d (far_radius is convex and non-decreasing
+    in the speed), g <= 0 on [r, R] once it is at both ends: bisection keeps g(hi) <= 0.
+    The test keeps a relative margin far above the rounding of far_radius."""
+    gap = 1e-9
+    if _far_radius(kn * R * (1.0 + gap) + c, far) > R * (1.0 - gap):
+        return R
+    lo, hi = 0.0, R
+    for _ in range(64):
+        if hi - lo <= _RADIUS_TOL * hi:
+            break
+        mid = 0.5 * (lo + hi)
+        if _far_radius(kn * mid * (1.0 + gap) + c, far) > mid * (1.0 - gap):
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+@jit_inline
+def shortened(r2, far, fld, e_i):
+    """The squared search radius of a UAV with residual e_i, for rows of the kind ``far``
+    against UAVs whose residual is at most eo: the smaller of the radius from the affine
+    bound and r2. ``fld`` = (kn, eo, pad) of :func:`velocity_field`."""
+    kn, eo, pad = fld
+    c = (e_i + eo) * (1.0 + 1e-9) + 2.0 * pad
+    r = search_radius(far, kn, c, np.sqrt(r2))
+    return min(r2, r * r)
+
+
+#: a search uses the finest grid of the ladder whose block reaches at most this many cells
+#: from the query's cell (the cells visited grow as its cube; the UAVs checked, as the
+#: coarser cells hold more of them)
+_LADDER_REACH = 3.0
+
+
+@jit_inline
+def candidates(q, b, pt, r2, exclude, use_grid, gs, hits):
+    """The UAVs of swarm b closer than sqrt(r2) to ``pt`` (``exclude`` left out) into
+    ``hits``, in increasing index, from a grid of the ladder ``gs`` (fine to coarse, all
+    built from q) or a scan of all N; returns their count. Every path gives the same list."""
+    if use_grid:
+        g0, g1, g2 = gs
+        if r2 <= (_LADDER_REACH * g0.h) ** 2:
+            return within_radius(q, b, pt, r2, exclude, g0, hits)
+        if r2 <= (_LADDER_REACH * g1.h) ** 2:
+            return within_radius(q, b, pt, r2, exclude, g1, hits)
+        return within_radius(q, b, pt, r2, exclude, g2, hits)
+    n = 0
+    for j in range(q.shape[1]):
+        d2 = 0.0
+        for k in range(q.shape[2]):
+            x = q[b, j, k] - pt[k]
+            d2 += x * x
+        if j != exclude and d2 < r2:
+            hits[n] = j
+            n += 1
+    return n
+
+
+#: the unpaired UAVs' search radii are tabulated at this many residual levels per step
+RADIUS_LEVELS = 64
+
+
+@jit_kernel
+def radius_table(r2, far, fld, table):
+    """The squared search radius of an unpaired UAV (:func:`shortened`) at residual levels
+    0, de, 2 de, ... up to eo (``fld`` = (kn, eo, pad)) into ``table``; returns de. The
+    radius grows with the residual, so a UAV whose residual is at most l de may use entry
+    l: one bisection per level and step instead of one per UAV."""
+    L = table.shape[0] - 1
+    eo = fld[1]
+    de = eo / L if np.isfinite(eo) else 0.0
+    for lv in range(L + 1):
+        e = lv * de * (1.0 + 2e-9) if de > 0.0 else eo
+        table[lv] = shortened(r2, far, fld, e)
+    return de
+
+
+@jit_inline
+def tabulated(table, de, e_i):
+    """Entry of :func:`radius_table` for a residual e_i <= eo."""
+    if not de > 0.0:
+        return table[table.shape[0] - 1]
+    lv = int(np.ceil(e_i / de))
+    return table[min(max(lv, 0), table.shape[0] - 1)]
