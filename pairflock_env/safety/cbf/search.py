@@ -151,22 +151,42 @@ def _solve_gradient(C, P, D, fit):
 
 
 @jit_inline
-def search_radius(far, kn, c, R):
-    """How far UAV i must search for rows of this kind: the smallest r <= R such that the
-    far-UAV skip drops every UAV j at a distance d in [r, R] whose relative speed is at
-    most kn d + c (:func:`velocity_field`; c = e_i + e_j's bound, padded). With
-    g(d) = far_radius(kn d + c) - d, convex in d (far_radius is convex and non-decreasing
-    in the speed), g <= 0 on [r, R] once it is at both ends: bisection keeps g(hi) <= 0.
-    The test keeps a relative margin far above the rounding of far_radius."""
+def _excess(far, kn, c, d):
+    """g(d) of :func:`search_radius`, with a relative margin of 1e-9 on both sides: far
+    above the rounding of far_radius, so g(d) <= 0 holds in exact arithmetic too."""
     gap = 1e-9
-    if _far_radius(kn * R * (1.0 + gap) + c, far) > R * (1.0 - gap):
+    return _far_radius(kn * d * (1.0 + gap) + c, far) - d * (1.0 - gap)
+
+
+@jit_inline
+def search_radius(far, kn, c, R):
+    """How far UAV i must search for rows of this kind: a radius r <= R such that the
+    far-UAV skip drops every UAV j at a distance d in [r, R] whose relative speed is at
+    most kn d + c (:func:`velocity_field`; c = e_i + e_j's bound, padded).
+
+    g(d) = far_radius(kn d + c) - d is convex in d (far_radius is convex and
+    non-decreasing in the speed), so g <= 0 on [r, R] once it is at both ends. g is a
+    quadratic wherever the speed term of far_radius is positive: the quadratic through
+    g(0), g(R/2), g(R) gives its root, taken when g confirms it; else bisection, which
+    keeps g(hi) <= 0, to a relative width of 1e-3."""
+    gR = _excess(far, kn, c, R)
+    if gR > 0.0:
         return R
     lo, hi = 0.0, R
+    g0, m = _excess(far, kn, c, 0.0), 0.5 * R
+    a = (gR - 2.0 * _excess(far, kn, c, m) + g0) / (2.0 * m * m)
+    bq = (gR - g0) / R - a * R
+    disc = bq * bq - 4.0 * a * g0
+    if g0 > 0.0 and disc >= 0.0 and np.sqrt(disc) - bq > 0.0:
+        r = min(2.0 * g0 / (np.sqrt(disc) - bq) * (1.0 + 1e-6) + 1e-9, R)
+        if _excess(far, kn, c, r) <= 0.0:
+            return r
+        lo = r
     for _ in range(64):
         if hi - lo <= _RADIUS_TOL * hi:
             break
         mid = 0.5 * (lo + hi)
-        if _far_radius(kn * mid * (1.0 + gap) + c, far) > mid * (1.0 - gap):
+        if _excess(far, kn, c, mid) > 0.0:
             lo = mid
         else:
             hi = mid
@@ -219,24 +239,24 @@ RADIUS_LEVELS = 64
 
 
 @jit_kernel
-def radius_table(r2, far, fld, table):
+def radius_table(r2, far, fld, table, N):
     """The squared search radius of an unpaired UAV (:func:`shortened`) at residual levels
-    0, de, 2 de, ... up to eo (``fld`` = (kn, eo, pad)) into ``table``; returns de. The
-    radius grows with the residual, so a UAV whose residual is at most l de may use entry
-    l: one bisection per level and step instead of one per UAV."""
-    L = table.shape[0] - 1
+    0, de, 2 de, ... L de = eo (``fld`` = (kn, eo, pad)) into ``table``, L = N / 16 within
+    [4, RADIUS_LEVELS]; returns (de, L). The radius grows with the residual, so a UAV whose
+    residual is at most l de may use entry l: L + 1 radii per swarm and step, not N."""
+    L = min(max(N // 16, 4), table.shape[0] - 1)
     eo = fld[1]
     de = eo / L if np.isfinite(eo) else 0.0
     for lv in range(L + 1):
         e = lv * de * (1.0 + 2e-9) if de > 0.0 else eo
         table[lv] = shortened(r2, far, fld, e)
-    return de
+    return de, L
 
 
 @jit_inline
-def tabulated(table, de, e_i):
+def tabulated(table, de, L, e_i):
     """Entry of :func:`radius_table` for a residual e_i <= eo."""
     if not de > 0.0:
-        return table[table.shape[0] - 1]
+        return table[L]
     lv = int(np.ceil(e_i / de))
-    return table[min(max(lv, 0), table.shape[0] - 1)]
+    return table[min(max(lv, 0), L)]

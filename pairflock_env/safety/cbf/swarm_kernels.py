@@ -277,7 +277,9 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, 
                   far_up, a_u, Au, fld, res, cstart, cnt, clist)  # fmt: skip
     rows = (paired, mate, agents, coop_u, coop_p, cstart, clist)
     prune = pr[_S.skip_far] != 0.0
-    de = radius_table(pr[_S.swarm_radius2], far_uu, fld, table) if prune else 0.0
+    de, L = (
+        radius_table(pr[_S.swarm_radius2], far_uu, fld, table, q.shape[1]) if prune else (0.0, 0)
+    )
     ctr = vec[_CTR]
     for i in range(q.shape[1]):
         U = bound[i]
@@ -297,7 +299,7 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, 
             if prune:
                 r2 = shortened(r2, far_u, fld, res[i])
         else:
-            r2 = tabulated(table, de, res[i]) if prune else pr[_S.swarm_radius2]
+            r2 = tabulated(table, de, L, res[i]) if prune else pr[_S.swarm_radius2]
         K, h, ok = _uav_rows(q, p, b, i, rows, pr, far_u, far_p, U, r2, grid, gs, hits, vec, G, rhs)
         violated, status = _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver)
         hmin[b, i] = h
