@@ -22,7 +22,15 @@ from pairflock_env import PairFlockCore, make_config
 from pairflock_env.config.sections.flocking import repulsion_floor, repulsion_peak
 from pairflock_env.safety import SafetyParams, SwarmFilter
 from pairflock_env.safety.cbf.kernels import _far_radius, _sigma_min
-from pairflock_env.safety.cbf.search import FIT_ROWS, search_radius, velocity_field
+from pairflock_env.safety.cbf.search import (
+    FIT_ROWS,
+    SCAN,
+    SWEEP,
+    candidates,
+    search_radius,
+    sort_by_x,
+    velocity_field,
+)
 from pairflock_env.safety.cbf.swarm_kernels import SWARM as SWARM_PARAMS
 from pairflock_env.safety.cbf.swarm_kernels import _far_of
 from pairflock_env.swarm.flocking import FLOCKING, flocking_params
@@ -241,6 +249,33 @@ def test_the_search_radius_leaves_out_only_what_the_skip_drops():
         if r < R:  # and no shorter radius would do (to the bisection's tolerance)
             x = r * (1 - 2e-3)
             assert _far_radius(kn * x + c, far) > x
+
+
+@pytest.mark.parametrize("D", [2, 3])
+def test_the_x_sweep_finds_what_the_scan_finds(D):
+    """Without a grid the searches walk each swarm's x order (kept across steps): the same
+    hits in the same order as the scan of all N, ties in x and a reordered flock included;
+    a non-finite swarm is left to the scan."""
+    rng = np.random.default_rng(60 + D)
+    B, N = 2, 300
+    q, p = _random_state(rng, B, N, D, box=40.0, speed=3.0)
+    q[:, 10:20, 0] = q[:, 10:11, 0]  # ten UAVs at the same x
+    order = np.tile(np.arange(N), (B, 1))
+    pos, mark = np.zeros(N, np.int64), np.zeros(N // 64 + 2, np.uint64)
+    hits, ref = np.zeros(N + 1, np.int64), np.zeros(N + 1, np.int64)
+    gs = (NeighborGrid(1, 1, D, cell_size=1.0).build(np.zeros((1, 1, D))).arrays,) * 3
+    for _ in range(3):  # steps
+        for b in range(B):
+            assert sort_by_x(q, p, b, order[b], pos)
+            assert (np.diff(q[b, order[b], 0]) >= 0).all()
+            for i in range(N):
+                r2 = rng.uniform(0.0, 15.0) ** 2
+                n = candidates(q, b, i, r2, SWEEP, gs, (order[b], pos, mark), hits)
+                m = candidates(q, b, i, r2, SCAN, gs, (order[b], pos, mark), ref)
+                assert n == m and np.array_equal(hits[:n], ref[:m])
+        q += rng.normal(0.0, 2.0, q.shape)  # the next step's positions
+    q[1, 5, 1] = np.nan
+    assert not sort_by_x(q, p, 1, order[1], pos)
 
 
 @pytest.mark.parametrize("D", [2, 3])

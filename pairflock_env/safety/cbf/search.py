@@ -19,15 +19,19 @@ import numpy as np
 
 from pairflock_env.kernels import jit_inline, jit_kernel
 from pairflock_env.safety.cbf.kernels import _far_radius
-from pairflock_env.swarm.grid import within_radius
+from pairflock_env.swarm.grid import order_indices, within_radius
 
 __all__ = [
     "FIT_ROWS",
+    "GRID",
     "RADIUS_LEVELS",
+    "SCAN",
+    "SWEEP",
     "candidates",
     "radius_table",
     "search_radius",
     "shortened",
+    "sort_by_x",
     "tabulated",
     "velocity_field",
 ]
@@ -210,25 +214,92 @@ def shortened(r2, far, fld, e_i):
 _LADDER_REACH = 3.0
 
 
+@jit_kernel
+def sort_by_x(q, p, b, order, pos):
+    """Put ``order`` (swarm b's UAVs, as left by the last step) in increasing x by insertion,
+    O(N) while the flock moves little between steps, and its inverse into ``pos``. Returns
+    False, leaving both, when a position is not finite or a speed reaches 1e150: then only
+    the scan of all N stops where the pair filter's scan would (as for the grid)."""
+    N = q.shape[1]
+    for j in range(N):
+        for k in range(q.shape[2]):
+            if not (np.isfinite(q[b, j, k]) and abs(p[b, j, k]) < 1e150):
+                return False
+    for t in range(1, N):
+        j = order[t]
+        x = q[b, j, 0]
+        s = t
+        while s > 0 and q[b, order[s - 1], 0] > x:
+            order[s] = order[s - 1]
+            s -= 1
+        order[s] = j
+    for t in range(N):
+        pos[order[t]] = t
+    return True
+
+
 @jit_inline
-def candidates(q, b, pt, r2, exclude, use_grid, gs, hits):
-    """The UAVs of swarm b closer than sqrt(r2) to ``pt`` (``exclude`` left out) into
-    ``hits``, in increasing index, from a grid of the ladder ``gs`` (fine to coarse, all
-    built from q) or a scan of all N; returns their count. Every path gives the same list."""
-    if use_grid:
+def _d2_hit(q, b, j, pt, r2, exclude):
+    """Whether UAV j is a hit: the scan's test, the same operations."""
+    d2 = 0.0
+    for k in range(q.shape[2]):
+        x = q[b, j, k] - pt[k]
+        d2 += x * x
+    return j != exclude and d2 < r2
+
+
+@jit_inline
+def _sweep(q, b, pt, r2, exclude, xs, hits):
+    """The scan's hits around UAV ``exclude`` (at ``pt``) from the x-sorted order ``xs`` =
+    (order, pos, mark): walking out both ways from it until the x offset alone reaches the
+    radius. Rounding keeps that exact: x - x_i grows along the order, and a squared
+    distance is never below its first term."""
+    order, pos, mark = xs
+    n = 0
+    s0 = pos[exclude]
+    for t in range(s0, q.shape[1]):
+        j = order[t]
+        x = q[b, j, 0] - pt[0]
+        if x * x >= r2:
+            break
+        if _d2_hit(q, b, j, pt, r2, exclude):
+            hits[n] = j
+            n += 1
+    for t in range(s0 - 1, -1, -1):
+        j = order[t]
+        x = q[b, j, 0] - pt[0]
+        if x * x >= r2:
+            break
+        if _d2_hit(q, b, j, pt, r2, exclude):
+            hits[n] = j
+            n += 1
+    return order_indices(hits, n, mark)
+
+
+#: how :func:`candidates` searches: all N, a grid of the ladder, or the x-sorted order
+SCAN, GRID, SWEEP = 0, 1, 2
+
+
+@jit_inline
+def candidates(q, b, i, r2, mode, gs, xs, hits):
+    """The UAVs of swarm b closer than sqrt(r2) to UAV i (itself left out) into ``hits``,
+    in increasing index; returns their count. ``mode``: SCAN (all N), GRID (the finest grid
+    of the ladder ``gs`` whose cells are at least a third of the radius; fine to coarse,
+    all built from q) or SWEEP (the x-sorted order ``xs`` of :func:`sort_by_x`). Every
+    mode gives the same list."""
+    pt = q[b, i]
+    if mode == GRID:
         g0, g1, g2 = gs
         if r2 <= (_LADDER_REACH * g0.h) ** 2:
-            return within_radius(q, b, pt, r2, exclude, g0, hits)
+            return within_radius(q, b, pt, r2, i, g0, hits)
         if r2 <= (_LADDER_REACH * g1.h) ** 2:
-            return within_radius(q, b, pt, r2, exclude, g1, hits)
-        return within_radius(q, b, pt, r2, exclude, g2, hits)
+            return within_radius(q, b, pt, r2, i, g1, hits)
+        return within_radius(q, b, pt, r2, i, g2, hits)
+    if mode == SWEEP:
+        return _sweep(q, b, pt, r2, i, xs, hits)
     n = 0
     for j in range(q.shape[1]):
-        d2 = 0.0
-        for k in range(q.shape[2]):
-            x = q[b, j, k] - pt[k]
-            d2 += x * x
-        if j != exclude and d2 < r2:
+        if _d2_hit(q, b, j, pt, r2, i):
             hits[n] = j
             n += 1
     return n

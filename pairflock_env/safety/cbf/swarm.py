@@ -162,7 +162,12 @@ class SwarmFilter:
             np.zeros((FIT_ROWS, 3)),
             np.zeros(N),
             np.zeros(RADIUS_LEVELS + 1),
+            np.zeros(N, np.int64),
+            np.zeros(N // 64 + 2, np.uint64),
         )
+        #: (B, N) each swarm's UAVs in increasing x as the last step left them (searches
+        #: without a grid walk it; kept across steps, so sorting it again is near O(N))
+        self._xorder = np.zeros((0, N), np.int64)
         self._solver = (np.zeros((4, 4, 4)), np.zeros(5, np.int64), np.zeros((K, 3)),
                         np.zeros(K), np.zeros(K, np.int64), np.zeros(N))  # fmt: skip
 
@@ -214,6 +219,9 @@ class SwarmFilter:
         if any(b.h < a.h for a, b in itertools.pairwise(gs)):
             raise ValueError("grid is invalid: a ladder of grids must go from fine to coarse")
         gs += [gs[-1]] * (3 - len(gs))
+        if self._xorder.shape[0] != B:
+            self._xorder = np.tile(np.arange(N, dtype=np.int64), (B, 1))
+        work = (*self._work, self._xorder)
         swarm_kernel(q, p, a_nom, f, self._ints, self._reals, self._pr, grid is not None,
-                     tuple(gs), out.arrays(), self._work, self._solver)  # fmt: skip
+                     tuple(gs), out.arrays(), work, self._solver)  # fmt: skip
         return out

@@ -50,9 +50,13 @@ from pairflock_env.safety.cbf.kernels import (
     _solve_ws,
 )
 from pairflock_env.safety.cbf.search import (
+    GRID,
+    SCAN,
+    SWEEP,
     candidates,
     radius_table,
     shortened,
+    sort_by_x,
     tabulated,
     velocity_field,
 )
@@ -80,10 +84,10 @@ SWARM = KernelParams(
 )
 _S = SWARM.index
 
-#: rows of the (VEC_ROWS, 3) float scratch: a query point, UAV i's centre c_i, the solver's
-#: candidate and best point, x_nom, x, a row's normal
-_PT, _CTR, _CAND, _BEST, _XIN, _XOUT, _NV = range(7)
-VEC_ROWS = 7
+#: rows of the (VEC_ROWS, 3) float scratch: UAV i's centre c_i, the solver's candidate and
+#: best point, x_nom, x, a row's normal
+_CTR, _CAND, _BEST, _XIN, _XOUT, _NV = range(6)
+VEC_ROWS = 6
 #: relative pad of the drop threshold S over the rounding of (U + |c|) (alpha_ij / alpha_i)
 _S_PAD = 1e-12
 
@@ -146,15 +150,14 @@ def _abounds(f, b, paired, bound, abound):
 
 
 @jit_kernel
-def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, use_grid, gs, hits, vec,
+def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, mode, gs, xs, hits,
               far_up, a_u, Au, fld, res, cstart, cnt, clist):  # fmt: skip
     """For every unpaired UAV i, the paired UAVs j close enough for the row of (i, j) to
     bind from either side, in agent order, as clist[cstart[i]:cstart[i + 1]]: each paired
     UAV searches once, out to the larger search radius of both sides (j's, and ``far_up``,
     an unpaired UAV's against a paired one; at most the pairs' sensing radius) under the
     relative-speed bound of :func:`~.search.velocity_field` (``fld``, ``res``)."""
-    N, D = q.shape[1], q.shape[2]
-    pt = vec[_PT]
+    N = q.shape[1]
     for i in range(N + 1):
         cstart[i] = 0
     for fill in range(2):  # count, then fill
@@ -165,9 +168,7 @@ def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, use_grid, gs, h
             r2 = pr[_S.pair_radius2]
             if pr[_S.skip_far] != 0.0:
                 r2 = max(shortened(r2, far_j, fld, res[j]), shortened(r2, far_up, fld, res[j]))
-            for k in range(D):
-                pt[k] = q[b, j, k]
-            nh = candidates(q, b, pt, r2, j, use_grid, gs, hits)
+            nh = candidates(q, b, j, r2, mode, gs, xs, hits)
             for t in range(nh):
                 i = hits[t]
                 if paired[i]:
@@ -184,7 +185,7 @@ def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, use_grid, gs, h
 
 
 @jit_inline
-def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, r2, use_grid, gs, hits, vec, G, rhs):
+def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, r2, mode, gs, xs, hits, vec, G, rhs):
     """UAV i's rows into G, rhs: the unpaired UAVs within its (shortened) squared search
     radius r2, then the paired ones (every agent, for a paired i; its contact list, for an
     unpaired one unless the paired UAVs take those rows alone). ``far_u`` / ``far_p``: i's
@@ -192,16 +193,12 @@ def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, r2, use_grid, gs, hits, vec
     coop_p, cstart, clist), coop_* telling, for an unpaired and for a paired i, which UAVs
     share its rows. Returns (K, min H, ok)."""
     paired, mate, agents, coop_u, coop_p, cstart, clist = ints
-    D = q.shape[2]
     Ds, T, c, lam = pr[_S.barrier_distance], pr[_S.dt], pr[_S.position_gain], pr[_S.decay]
     tau, prune, A_o = pr[_S.reaction_time], pr[_S.skip_far] != 0.0, pr[_S.other_accel]
     R2p = pr[_S.pair_radius2]
     Rs2 = max(R2p, pr[_S.swarm_radius2])
     coop = coop_p if paired[i] else coop_u
-    pt = vec[_PT]
-    for k in range(D):
-        pt[k] = q[b, i, k]
-    nh = candidates(q, b, pt, r2, i, use_grid, gs, hits)
+    nh = candidates(q, b, i, r2, mode, gs, xs, hits)
     K, hmin, ctr, nv = 0, np.inf, vec[_CTR], vec[_NV]
     for t in range(nh):
         j = hits[t]
@@ -260,9 +257,14 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, 
     paired, mate, agents, coop_u, coop_p, slot = ints
     alpha, bound, abound = reals
     a_out, u_out, active, corr, infeas, hmin = outs
-    hits, cstart, cnt, clist, G, rhs, vec, fit, res, table = work
+    hits, cstart, cnt, clist, G, rhs, vec, fit, res, table, pos, mark, xorder = work
+    xs = (xorder[b], pos, mark)
     D = q.shape[2]
-    grid = use_grid and _grid_usable(q, p, b, gs[0])
+    mode = SCAN
+    if use_grid and _grid_usable(q, p, b, gs[0]):
+        mode = GRID
+    elif not use_grid and sort_by_x(q, p, b, xorder[b], xs[1]):
+        mode = SWEEP
     a_u, U_u, a_p = _class_values(paired, alpha, bound)
     Au, Ap = _abounds(f, b, paired, bound, abound)
     fld = velocity_field(q, p, b, paired, fit, res)
@@ -273,7 +275,7 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, 
         for i in range(q.shape[1] + 1):
             cstart[i] = 0
     else:
-        _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, grid, gs, hits, vec,
+        _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, mode, gs, xs, hits,
                   far_up, a_u, Au, fld, res, cstart, cnt, clist)  # fmt: skip
     rows = (paired, mate, agents, coop_u, coop_p, cstart, clist)
     prune = pr[_S.skip_far] != 0.0
@@ -300,7 +302,8 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, 
                 r2 = shortened(r2, far_u, fld, res[i])
         else:
             r2 = tabulated(table, de, L, res[i]) if prune else pr[_S.swarm_radius2]
-        K, h, ok = _uav_rows(q, p, b, i, rows, pr, far_u, far_p, U, r2, grid, gs, hits, vec, G, rhs)
+        K, h, ok = _uav_rows(q, p, b, i, rows, pr, far_u, far_p, U, r2, mode, gs, xs, hits, vec, G,
+                             rhs)  # fmt: skip
         violated, status = _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver)
         hmin[b, i] = h
         x, xin = vec[_XOUT], vec[_XIN]
@@ -331,7 +334,9 @@ def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, gs, outs, work, solv
         outs: (a_out (B, N, dim), u_out (B, M, dim) the agents' x, active, correction,
             infeasible, barrier (B, N)).
         work: (hits (N + 1,), cstart (N + 1,), cnt (N,), clist (N M,), G (N, 3), rhs (N,),
-            vec (VEC_ROWS, 3), fit (FIT_ROWS, 3), res (N,), table (RADIUS_LEVELS + 1,)).
+            vec (VEC_ROWS, 3), fit (FIT_ROWS, 3), res (N,), table (RADIUS_LEVELS + 1,),
+            pos (N,), mark (N // 64 + 2,) uint64 zeros, xorder (B, N): each swarm's UAVs
+            in x order, kept across calls).
         solver: (W (4, 4, 4), idx (5,), Gw, bw, ws, marg) of :func:`~.kernels._solve_ws`.
     """
     for b in range(q.shape[0]):
