@@ -425,6 +425,13 @@ def test_the_swarm_scope_needs_the_cbf_filter_and_follows_the_vehicle():
         paired = filt._ints[0]
         assert (filt._reals[1][~paired] == U).all()
         assert np.allclose(filt._reals[0][~paired], alpha)
+    # the unset reaction time: the vehicle's lag, 1.5 times it under the swarm scope
+    pairs = PairFlockCore(make_config("paper-quadrotor", safety_filter="cbf")).safety.filter
+    assert particle.params.reaction_time == 0.0
+    assert np.isclose(quad.params.reaction_time, 1.5 * pairs.params.reaction_time)
+    assert np.isclose(pairs.params.reaction_time, 0.1)
+    set_tau = make_config("paper-quadrotor", safety_reaction_time=0.05, **SWARM)
+    assert PairFlockCore(set_tau).safety.filter.params.reaction_time == 0.05
 
 
 def test_sliding_mode_with_the_swarm_layer_keeps_every_two_uavs_apart():
