@@ -414,6 +414,9 @@ class PairFlockCore:
         (:class:`~pairflock_env.swarm.passes.NeighborPass`)."""
         fl, pp = self._neighbors.run(self.q, self.p, lq, lp, self._pinned)
         self._flock_out = fl
+        sense = getattr(self.safety, "sense", None)  # optional for a plug-in stage
+        if sense is not None:
+            sense(fl)
         return fl, pp
 
     def _perceived_partner(

@@ -264,15 +264,20 @@ def test_the_x_sweep_finds_what_the_scan_finds(D):
     pos, mark = np.zeros(N, np.int64), np.zeros(N // 64 + 2, np.uint64)
     hits, ref = np.zeros(N + 1, np.int64), np.zeros(N + 1, np.int64)
     gs = (NeighborGrid(1, 1, D, cell_size=1.0).build(np.zeros((1, 1, D))).arrays,) * 3
+    unknown = np.zeros((B, N))
     for _ in range(3):  # steps
+        d2 = ((q[:, :, None] - q[:, None]) ** 2).sum(-1) + np.where(np.eye(N), np.inf, 0.0)
+        sep = d2.min(-1)  # the nearest neighbour: searches shorter than it are skipped
         for b in range(B):
             assert sort_by_x(q, p, b, order[b], pos)
             assert (np.diff(q[b, order[b], 0]) >= 0).all()
+            xs = (order[b], pos, mark)
             for i in range(N):
                 r2 = rng.uniform(0.0, 15.0) ** 2
-                n = candidates(q, b, i, r2, SWEEP, gs, (order[b], pos, mark), hits)
-                m = candidates(q, b, i, r2, SCAN, gs, (order[b], pos, mark), ref)
-                assert n == m and np.array_equal(hits[:n], ref[:m])
+                m = candidates(q, b, i, r2, SCAN, gs, xs, unknown, ref)
+                for known in (unknown, sep):
+                    n = candidates(q, b, i, r2, SWEEP, gs, xs, known, hits)
+                    assert n == m and np.array_equal(hits[:n], ref[:m])
         q += rng.normal(0.0, 2.0, q.shape)  # the next step's positions
     q[1, 5, 1] = np.nan
     assert not sort_by_x(q, p, 1, order[1], pos)
@@ -296,12 +301,17 @@ def test_the_shortened_searches_miss_no_row(D):
     ref = every.apply(q, p, a_nom, f)
     assert ref.active.sum() >= 10
     ladder = [NeighborGrid(B, N, D, cell_size=h).build(q) for h in (2.0, 8.0, 32.0)]
+    d2 = ((q[:, :, None] - q[:, None]) ** 2).sum(-1) + np.where(np.eye(N), np.inf, 0.0)
+    sep = d2.min(-1)  # each UAV's nearest neighbour, as the flocking pass gives it
     for grid in (None, ladder[0], ladder):
-        out = filt.apply(q, p, a_nom, f, grid=grid)
-        for x, y in zip(ref.arrays()[:5], out.arrays()[:5], strict=True):
-            assert np.array_equal(x, y)
+        for known in (None, sep):
+            out = filt.apply(q, p, a_nom, f, grid=grid, separation=known)
+            for x, y in zip(ref.arrays()[:5], out.arrays()[:5], strict=True):
+                assert np.array_equal(x, y)
     with pytest.raises(ValueError, match="fine to coarse"):
         filt.apply(q, p, a_nom, f, grid=ladder[::-1])
+    with pytest.raises(ValueError, match="separation has shape"):
+        filt.apply(q, p, a_nom, f, separation=sep[0])
 
 
 def test_core_on_the_grid_flies_the_all_pairs_trajectories():

@@ -67,6 +67,12 @@ class NoFilterStage:
     def apply(self, q, p, flock_acc, u, grid=None) -> np.ndarray:
         return u
 
+    def sense(self, flock_out: dict[str, np.ndarray]) -> None:
+        """Called by the core after every neighbour pass with the flocking outputs of the
+        state the next :meth:`apply` filters (``min_d2``: each UAV's squared distance to
+        its nearest non-partner UAV, ...); a stage may keep what it needs. Optional for a
+        plug-in stage; this one keeps nothing."""
+
     def info(self, reset: bool = False) -> dict[str, np.ndarray]:
         shape = self._shape
         return {
@@ -169,6 +175,8 @@ class SwarmStage(NoFilterStage):
         #: LADDER^2 times that, for the long searches of a fast flock), when the core's
         #: neighbour search is the grid; empty: every search scans all N (same result)
         self.grids: tuple[NeighborGrid, ...] = ()
+        #: the last neighbour pass's min_d2 (B, N) (:meth:`sense`), or None
+        self._separation: np.ndarray | None = None
         if config.uses_grid:
             h = SWARM_CELL * params.barrier_distance
             self.grids = tuple(NeighborGrid(B, N, D, cell_size=h * LADDER**k) for k in range(3))
@@ -181,9 +189,15 @@ class SwarmStage(NoFilterStage):
         a[:, self.agent_uavs] += u
         for g in self.grids:
             g.build(q)
-        out = self.filter.apply(q, p, a, flock_acc, self.output, self.grids or None)
+        sep = self._separation
+        out = self.filter.apply(q, p, a, flock_acc, self.output, self.grids or None, sep)
         self.whole_command = out.a
         return out.u.copy()
+
+    def sense(self, flock_out: dict[str, np.ndarray]) -> None:
+        """Keep the pass's nearest-neighbour distances: a UAV whose search radius is below
+        its own needs no search (the same commands; most UAVs of a settled flock)."""
+        self._separation = flock_out["min_d2"]
 
     def info(self, reset: bool = False) -> dict[str, np.ndarray]:
         """The agents' rows of the layer's outputs (as :meth:`CBFStage.info`) and the per-swarm

@@ -280,14 +280,27 @@ def _sweep(q, b, pt, r2, exclude, xs, hits):
 SCAN, GRID, SWEEP = 0, 1, 2
 
 
+#: a search is skipped when its squared radius is below this share of the squared distance
+#: to the UAV's nearest neighbour (far above the rounding by which two computations of one
+#: squared distance can differ)
+_SEP_SHARE = 1.0 - 1e-12
+
+
 @jit_inline
-def candidates(q, b, i, r2, mode, gs, xs, hits):
+def candidates(q, b, i, r2, mode, gs, xs, sep, hits):
     """The UAVs of swarm b closer than sqrt(r2) to UAV i (itself left out) into ``hits``,
     in increasing index; returns their count. ``mode``: SCAN (all N), GRID (the finest grid
     of the ladder ``gs`` whose cells are at least a third of the radius; fine to coarse,
     all built from q) or SWEEP (the x-sorted order ``xs`` of :func:`sort_by_x`). Every
-    mode gives the same list."""
+    mode gives the same list.
+
+    ``sep`` (B, N): each UAV's squared distance to its nearest neighbour other than its
+    partner (the flocking pass's ``min_d2`` of this q; zeros when unknown). Under GRID and
+    SWEEP (a finite swarm) a radius below it finds nobody but perhaps the partner, which
+    is paired and never a candidate: the search is skipped, as most are in a settled flock."""
     pt = q[b, i]
+    if mode != SCAN and r2 < sep[b, i] * _SEP_SHARE:
+        return 0
     if mode == GRID:
         g0, g1, g2 = gs
         if r2 <= (_LADDER_REACH * g0.h) ** 2:

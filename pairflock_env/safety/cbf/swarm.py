@@ -78,6 +78,15 @@ def _positive(name: str, value: float) -> float:
     return v
 
 
+def _separation(x: npt.ArrayLike, shape: tuple[int, int]) -> np.ndarray:
+    a = np.asarray(x)
+    if a.dtype.kind not in "fiu":
+        raise TypeError(f"separation has dtype {a.dtype}; expected a real dtype")
+    if a.shape != shape:
+        raise ValueError(f"separation has shape {a.shape}, expected {shape}")
+    return np.ascontiguousarray(a, dtype=np.float64)
+
+
 class SwarmFilter:
     """The swarm layer over B swarms of N UAVs.
 
@@ -183,6 +192,7 @@ class SwarmFilter:
         flock_accel: npt.ArrayLike,
         out: SwarmOutput | None = None,
         grid: NeighborGrid | Sequence[NeighborGrid] | None = None,
+        separation: npt.ArrayLike | None = None,
     ) -> SwarmOutput:
         """Filter the nominal whole command of every UAV of every swarm.
 
@@ -196,6 +206,10 @@ class SwarmFilter:
                 ``q`` (any cell size), or a ladder of up to three such grids, finest first:
                 each search then uses the finest grid whose cells are at least a third of
                 its radius, with the same result bit for bit as scanning all N.
+            separation: optional (B, N) squared distance from each UAV to its nearest
+                other UAV, its partner left out, in these ``q`` (the flocking pass's
+                ``min_d2``): searches shorter than it are skipped, with the same result. It
+                must be exact (or smaller); a larger value would hide a UAV.
         """
         check = SafetyFilter._array
         q, p = check("q", q, None), check("p", p, None)
@@ -221,7 +235,9 @@ class SwarmFilter:
         gs += [gs[-1]] * (3 - len(gs))
         if self._xorder.shape[0] != B:
             self._xorder = np.tile(np.arange(N, dtype=np.int64), (B, 1))
+            self._unknown = np.zeros((B, N))
+        sep = self._unknown if separation is None else _separation(separation, (B, N))
         work = (*self._work, self._xorder)
         swarm_kernel(q, p, a_nom, f, self._ints, self._reals, self._pr, grid is not None,
-                     tuple(gs), out.arrays(), work, self._solver)  # fmt: skip
+                     tuple(gs), sep, out.arrays(), work, self._solver)  # fmt: skip
         return out

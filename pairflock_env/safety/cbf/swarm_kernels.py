@@ -150,7 +150,7 @@ def _abounds(f, b, paired, bound, abound):
 
 
 @jit_kernel
-def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, mode, gs, xs, hits,
+def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, mode, gs, xs, sep, hits,
               far_up, a_u, Au, fld, res, cstart, cnt, clist):  # fmt: skip
     """For every unpaired UAV i, the paired UAVs j close enough for the row of (i, j) to
     bind from either side, in agent order, as clist[cstart[i]:cstart[i + 1]]: each paired
@@ -168,7 +168,7 @@ def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, mode, gs, xs, h
             r2 = pr[_S.pair_radius2]
             if pr[_S.skip_far] != 0.0:
                 r2 = max(shortened(r2, far_j, fld, res[j]), shortened(r2, far_up, fld, res[j]))
-            nh = candidates(q, b, j, r2, mode, gs, xs, hits)
+            nh = candidates(q, b, j, r2, mode, gs, xs, sep, hits)
             for t in range(nh):
                 i = hits[t]
                 if paired[i]:
@@ -185,7 +185,7 @@ def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, mode, gs, xs, h
 
 
 @jit_inline
-def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, r2, mode, gs, xs, hits, vec, G, rhs):
+def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, r2, mode, gs, xs, sep, hits, vec, G, rhs):
     """UAV i's rows into G, rhs: the unpaired UAVs within its (shortened) squared search
     radius r2, then the paired ones (every agent, for a paired i; its contact list, for an
     unpaired one unless the paired UAVs take those rows alone). ``far_u`` / ``far_p``: i's
@@ -198,7 +198,7 @@ def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, r2, mode, gs, xs, hits, vec
     R2p = pr[_S.pair_radius2]
     Rs2 = max(R2p, pr[_S.swarm_radius2])
     coop = coop_p if paired[i] else coop_u
-    nh = candidates(q, b, i, r2, mode, gs, xs, hits)
+    nh = candidates(q, b, i, r2, mode, gs, xs, sep, hits)
     K, hmin, ctr, nv = 0, np.inf, vec[_CTR], vec[_NV]
     for t in range(nh):
         j = hits[t]
@@ -252,7 +252,7 @@ def _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver):
 
 
 @jit_kernel
-def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, solver):
+def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, sep, outs, work, solver):
     """Every UAV of swarm b (see :func:`swarm_kernel` for the arguments)."""
     paired, mate, agents, coop_u, coop_p, slot = ints
     alpha, bound, abound = reals
@@ -275,7 +275,7 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, 
         for i in range(q.shape[1] + 1):
             cstart[i] = 0
     else:
-        _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, mode, gs, xs, hits,
+        _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, mode, gs, xs, sep, hits,
                   far_up, a_u, Au, fld, res, cstart, cnt, clist)  # fmt: skip
     rows = (paired, mate, agents, coop_u, coop_p, cstart, clist)
     prune = pr[_S.skip_far] != 0.0
@@ -302,8 +302,8 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, 
                 r2 = shortened(r2, far_u, fld, res[i])
         else:
             r2 = tabulated(table, de, L, res[i]) if prune else pr[_S.swarm_radius2]
-        K, h, ok = _uav_rows(q, p, b, i, rows, pr, far_u, far_p, U, r2, mode, gs, xs, hits, vec, G,
-                             rhs)  # fmt: skip
+        K, h, ok = _uav_rows(q, p, b, i, rows, pr, far_u, far_p, U, r2, mode, gs, xs, sep, hits,
+                             vec, G, rhs)  # fmt: skip
         violated, status = _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver)
         hmin[b, i] = h
         x, xin = vec[_XOUT], vec[_XIN]
@@ -319,7 +319,7 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, 
 
 
 @jit_kernel
-def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, gs, outs, work, solver):
+def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, gs, sep, outs, work, solver):
     """The swarm layer over every swarm: each UAV's filtered whole command.
 
     Args:
@@ -331,6 +331,8 @@ def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, gs, outs, work, solv
         reals: (alpha (N,) brake, bound (N,) U_i, abound (N,) scratch).
         pr: :data:`SWARM` vector; use_grid, gs: three grids of q (GridArrays, fine to coarse;
             the same grid thrice is valid) to search, or not.
+        sep: (B, N) each UAV's squared distance to its nearest non-partner UAV (zeros:
+            unknown), for :func:`~.search.candidates` to skip searches shorter than it.
         outs: (a_out (B, N, dim), u_out (B, M, dim) the agents' x, active, correction,
             infeasible, barrier (B, N)).
         work: (hits (N + 1,), cstart (N + 1,), cnt (N,), clist (N M,), G (N, 3), rhs (N,),
@@ -340,4 +342,4 @@ def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, gs, outs, work, solv
         solver: (W (4, 4, 4), idx (5,), Gw, bw, ws, marg) of :func:`~.kernels._solve_ws`.
     """
     for b in range(q.shape[0]):
-        _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, outs, work, solver)
+        _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, sep, outs, work, solver)
