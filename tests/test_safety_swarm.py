@@ -24,9 +24,12 @@ from pairflock_env.safety import SafetyParams, SwarmFilter
 from pairflock_env.safety.cbf.kernels import _far_radius, _sigma_min
 from pairflock_env.safety.cbf.search import (
     FIT_ROWS,
+    RADIUS_LEVELS,
     SCAN,
     SWEEP,
     candidates,
+    outlier_level,
+    radius_table,
     search_radius,
     sort_by_x,
     velocity_field,
@@ -285,9 +288,9 @@ def test_the_x_sweep_finds_what_the_scan_finds(D):
 
 @pytest.mark.parametrize("D", [2, 3])
 def test_the_shortened_searches_miss_no_row(D):
-    """The search radii from the velocity field, the radius table and the grid ladder drop
-    only UAVs the far-UAV skip drops: the same commands and flags as every UAV in range
-    evaluated, on the scan, one grid and a ladder of three."""
+    """The search radii from the velocity field, the radius table, the outlier split and
+    the grid ladder drop only UAVs the far-UAV skip drops: the same commands and flags as
+    every UAV in range evaluated, on the x order, one grid and a ladder of three."""
     rng = np.random.default_rng(50 + D)
     B, N = 3, 250
     P = SafetyParams(accel_limit=80.0)
@@ -300,6 +303,12 @@ def test_the_shortened_searches_miss_no_row(D):
     a_nom = f + rng.normal(0.0, 30.0, q.shape)
     ref = every.apply(q, p, a_nom, f)
     assert ref.active.sum() >= 10
+    # not vacuous: the searches are split around the fastest 5 % (outlier_level < inf)
+    paired, res = filt._ints[0], np.zeros(N)
+    fld = velocity_field(q, p, 0, paired, np.zeros((FIT_ROWS, 3)), res)
+    far = _far_of(filt._pr, 16.0, 16.0, 20.0, 0.0, 20.0, 20.0)
+    de, L = radius_table(100.0**2, far, fld, np.zeros(RADIUS_LEVELS + 1), N)
+    assert outlier_level(res, paired, de, L, np.zeros(RADIUS_LEVELS + 1, np.int64)) < np.inf
     ladder = [NeighborGrid(B, N, D, cell_size=h).build(q) for h in (2.0, 8.0, 32.0)]
     d2 = ((q[:, :, None] - q[:, None]) ** 2).sum(-1) + np.where(np.eye(N), np.inf, 0.0)
     sep = d2.min(-1)  # each UAV's nearest neighbour, as the flocking pass gives it

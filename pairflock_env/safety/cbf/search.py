@@ -24,10 +24,13 @@ from pairflock_env.swarm.grid import order_indices, within_radius
 __all__ = [
     "FIT_ROWS",
     "GRID",
+    "OUTLIER_SHARE",
     "RADIUS_LEVELS",
     "SCAN",
     "SWEEP",
     "candidates",
+    "outlier_contacts",
+    "outlier_level",
     "radius_table",
     "search_radius",
     "shortened",
@@ -344,3 +347,69 @@ def tabulated(table, de, L, e_i):
         return table[L]
     lv = int(np.ceil(e_i / de))
     return table[min(max(lv, 0), L)]
+
+
+#: the share of a swarm's unpaired UAVs whose residual bounds the others' searches; the
+#: fastest rest (the "outliers") search for their rows against the others themselves
+#: (:func:`outlier_contacts`)
+OUTLIER_SHARE = 0.95
+
+
+@jit_kernel
+def outlier_level(res, paired, de, L, hist):
+    """The residual e_t below which ``OUTLIER_SHARE`` of the unpaired UAVs lie, as the upper
+    end of a level of :func:`radius_table` (``hist``: (L + 1,) int scratch); inf when no
+    level below the top one holds that share (no split)."""
+    if not de > 0.0:
+        return np.inf
+    for lv in range(L + 1):
+        hist[lv] = 0
+    n = 0
+    for j in range(res.shape[0]):
+        if not paired[j]:
+            hist[min(max(int(np.ceil(res[j] / de)), 0), L)] += 1
+            n += 1
+    need = int(np.ceil(OUTLIER_SHARE * n))
+    cum = 0
+    for lv in range(L):
+        cum += hist[lv]
+        if cum >= need:
+            return lv * de * (1.0 + 2e-9)
+    return np.inf
+
+
+@jit_kernel
+def outlier_contacts(q, b, paired, res, e_t, table, de, L, mode, gs, xs, sep, hits, ocon):
+    """For every unpaired UAV i with residual <= e_t, the unpaired UAVs j above e_t (the
+    outliers) that may need a row against it, in increasing j, as olist[ostart[i]:ostart[i
+    + 1]] (``ocon`` = (ostart, ocnt, olist)): each outlier searches once, out to its own
+    radius (``table``: :func:`radius_table` against every residual), which covers every
+    UAV whose residual is at most the largest. Returns False (lists empty) when they would
+    not fit in olist."""
+    ostart, ocnt, olist = ocon
+    N = q.shape[1]
+    for i in range(N + 1):
+        ostart[i] = 0
+    for fill in range(2):  # count, then fill
+        for j in range(N):
+            if paired[j] or not res[j] > e_t:
+                continue
+            nh = candidates(q, b, j, tabulated(table, de, L, res[j]), mode, gs, xs, sep, hits)
+            for t in range(nh):
+                i = hits[t]
+                if paired[i] or res[i] > e_t:
+                    continue
+                if fill == 0:
+                    ostart[i + 1] += 1
+                else:
+                    olist[ocnt[i]] = j
+                    ocnt[i] += 1
+        if fill == 0:
+            for i in range(N):
+                ostart[i + 1] += ostart[i]
+                ocnt[i] = ostart[i]
+            if ostart[N] > olist.shape[0]:
+                for i in range(N + 1):
+                    ostart[i] = 0
+                return False
+    return True

@@ -41,6 +41,10 @@ from pairflock_env.swarm.grid import NeighborGrid
 
 __all__ = ["SwarmFilter", "SwarmOutput"]
 
+#: room for this many outlier contacts per UAV (beyond it a swarm's step goes without the
+#: outlier split: the same commands, slower)
+OUTLIER_CONTACTS = 8
+
 
 @dataclasses.dataclass
 class SwarmOutput:
@@ -173,6 +177,13 @@ class SwarmFilter:
             np.zeros(RADIUS_LEVELS + 1),
             np.zeros(N, np.int64),
             np.zeros(N // 64 + 2, np.uint64),
+            (
+                np.zeros(RADIUS_LEVELS + 1),
+                np.zeros(RADIUS_LEVELS + 1, np.int64),
+                np.zeros(N + 1, np.int64),
+                np.zeros(N, np.int64),
+                np.zeros(OUTLIER_CONTACTS * N + 64, np.int64),
+            ),
         )
         #: (B, N) each swarm's UAVs in increasing x as the last step left them (searches
         #: without a grid walk it; kept across steps, so sorting it again is near O(N))

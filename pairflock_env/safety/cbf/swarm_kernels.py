@@ -54,6 +54,8 @@ from pairflock_env.safety.cbf.search import (
     SCAN,
     SWEEP,
     candidates,
+    outlier_contacts,
+    outlier_level,
     radius_table,
     shortened,
     sort_by_x,
@@ -185,14 +187,17 @@ def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, mode, gs, xs, s
 
 
 @jit_inline
-def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, r2, mode, gs, xs, sep, hits, vec, G, rhs):
+def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, r2, mode, gs, xs, sep, hits, vec, G, rhs,
+              ocon):  # fmt: skip
     """UAV i's rows into G, rhs: the unpaired UAVs within its (shortened) squared search
-    radius r2, then the paired ones (every agent, for a paired i; its contact list, for an
-    unpaired one unless the paired UAVs take those rows alone). ``far_u`` / ``far_p``: i's
-    far constants against the two classes; ``ints`` = (paired, mate, agents, coop_u,
-    coop_p, cstart, clist), coop_* telling, for an unpaired and for a paired i, which UAVs
-    share its rows. Returns (K, min H, ok)."""
+    radius r2 and those of its outlier list (``ocon`` of :func:`~.search.outlier_contacts`;
+    both in increasing index, merged), then the paired ones (every agent, for a paired i;
+    its contact list, for an unpaired one unless the paired UAVs take those rows alone).
+    ``far_u`` / ``far_p``: i's far constants against the two classes; ``ints`` = (paired,
+    mate, agents, coop_u, coop_p, cstart, clist), coop_* telling, for an unpaired and for a
+    paired i, which UAVs share its rows. Returns (K, min H, ok)."""
     paired, mate, agents, coop_u, coop_p, cstart, clist = ints
+    ostart, _, olist = ocon
     Ds, T, c, lam = pr[_S.barrier_distance], pr[_S.dt], pr[_S.position_gain], pr[_S.decay]
     tau, prune, A_o = pr[_S.reaction_time], pr[_S.skip_far] != 0.0, pr[_S.other_accel]
     R2p = pr[_S.pair_radius2]
@@ -200,12 +205,22 @@ def _uav_rows(q, p, b, i, ints, pr, far_u, far_p, U, r2, mode, gs, xs, sep, hits
     coop = coop_p if paired[i] else coop_u
     nh = candidates(q, b, i, r2, mode, gs, xs, sep, hits)
     K, hmin, ctr, nv = 0, np.inf, vec[_CTR], vec[_NV]
-    for t in range(nh):
-        j = hits[t]
+    o, o1 = ostart[i], ostart[i + 1]
+    R2 = r2 if o == o1 else pr[_S.swarm_radius2]  # outliers lie beyond r2; the skip drops
+    t = 0
+    while t < nh or o < o1:  # the hits and the outlier list, merged in increasing index
+        if o >= o1 or (t < nh and hits[t] <= olist[o]):
+            j = hits[t]
+            t += 1
+            if o < o1 and olist[o] == j:
+                o += 1
+        else:
+            j = olist[o]
+            o += 1
         if paired[j]:
             continue
         K, hmin, ok = _constrain_one(
-            b, i, j, -1, q, p, ctr, paired, coop, Ds, A_o, r2, lam, T, c, tau, U, G, rhs, nv,
+            b, i, j, -1, q, p, ctr, paired, coop, Ds, A_o, R2, lam, T, c, tau, U, G, rhs, nv,
             K, hmin, far_u, far_p, prune, Rs2,
         )  # fmt: skip
         if not ok:
@@ -257,7 +272,9 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, sep, outs, w
     paired, mate, agents, coop_u, coop_p, slot = ints
     alpha, bound, abound = reals
     a_out, u_out, active, corr, infeas, hmin = outs
-    hits, cstart, cnt, clist, G, rhs, vec, fit, res, table, pos, mark, xorder = work
+    hits, cstart, cnt, clist, G, rhs, vec, fit, res, table, pos, mark, outl, xorder = work
+    table_t, hist, ostart, ocnt, olist = outl
+    ocon = (ostart, ocnt, olist)
     xs = (xorder[b], pos, mark)
     D = q.shape[2]
     mode = SCAN
@@ -282,6 +299,21 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, sep, outs, w
     de, L = (
         radius_table(pr[_S.swarm_radius2], far_uu, fld, table, q.shape[1]) if prune else (0.0, 0)
     )
+    # the outlier split (module docstring of .search): the unpaired UAVs at most e_t search
+    # with e_t for every other residual, and the few above it find their rows for them
+    e_t, de_t, L_t = np.inf, de, L
+    if prune and mode != SCAN:
+        e_t = outlier_level(res, paired, de, L, hist)
+    if e_t < np.inf:
+        fld_t = (fld[0], e_t, fld[2])
+        de_t, L_t = radius_table(pr[_S.swarm_radius2], far_uu, fld_t, table_t, q.shape[1])
+        if not outlier_contacts(q, b, paired, res, e_t, table, de, L, mode, gs, xs, sep, hits,
+                                ocon):  # fmt: skip
+            e_t, de_t, L_t = np.inf, de, L
+    if e_t == np.inf:  # no split: every unpaired UAV searches out to every residual
+        table_t = table
+        for i in range(q.shape[1] + 1):
+            ostart[i] = 0
     ctr = vec[_CTR]
     for i in range(q.shape[1]):
         U = bound[i]
@@ -300,10 +332,14 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, sep, outs, w
             r2 = pr[_S.pair_radius2]
             if prune:
                 r2 = shortened(r2, far_u, fld, res[i])
+        elif not prune:
+            r2 = pr[_S.swarm_radius2]
+        elif res[i] > e_t:  # an outlier: out to every residual
+            r2 = tabulated(table, de, L, res[i])
         else:
-            r2 = tabulated(table, de, L, res[i]) if prune else pr[_S.swarm_radius2]
+            r2 = tabulated(table_t, de_t, L_t, res[i])
         K, h, ok = _uav_rows(q, p, b, i, rows, pr, far_u, far_p, U, r2, mode, gs, xs, sep, hits,
-                             vec, G, rhs)  # fmt: skip
+                             vec, G, rhs, ocon)  # fmt: skip
         violated, status = _solve_uav(a_nom, b, i, U, K, ok, vec, G, rhs, solver)
         hmin[b, i] = h
         x, xin = vec[_XOUT], vec[_XIN]
@@ -337,8 +373,10 @@ def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, gs, sep, outs, work,
             infeasible, barrier (B, N)).
         work: (hits (N + 1,), cstart (N + 1,), cnt (N,), clist (N M,), G (N, 3), rhs (N,),
             vec (VEC_ROWS, 3), fit (FIT_ROWS, 3), res (N,), table (RADIUS_LEVELS + 1,),
-            pos (N,), mark (N // 64 + 2,) uint64 zeros, xorder (B, N): each swarm's UAVs
-            in x order, kept across calls).
+            pos (N,), mark (N // 64 + 2,) uint64 zeros, outl (table_t like table, hist
+            (RADIUS_LEVELS + 1,) int, ostart (N + 1,), ocnt (N,), olist (any,) int: the
+            outlier split's scratch), xorder (B, N): each swarm's UAVs in x order, kept
+            across calls).
         solver: (W (4, 4, 4), idx (5,), Gw, bw, ws, marg) of :func:`~.kernels._solve_ws`.
     """
     for b in range(q.shape[0]):
