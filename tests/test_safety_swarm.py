@@ -24,6 +24,7 @@ from pairflock_env.safety import SafetyParams, SwarmFilter
 from pairflock_env.safety.cbf.kernels import _far_radius, _sigma_min
 from pairflock_env.safety.cbf.search import (
     FIT_ROWS,
+    LADDER_REACH,
     RADIUS_LEVELS,
     SCAN,
     SWEEP,
@@ -274,7 +275,7 @@ def test_the_x_sweep_finds_what_the_scan_finds(D):
         for b in range(B):
             assert sort_by_x(q, p, b, order[b], pos)
             assert (np.diff(q[b, order[b], 0]) >= 0).all()
-            xs = (order[b], pos, mark)
+            xs = (order[b], pos, mark, np.zeros(1))
             for i in range(N):
                 r2 = rng.uniform(0.0, 15.0) ** 2
                 m = candidates(q, b, i, r2, SCAN, gs, xs, unknown, ref)
@@ -321,6 +322,24 @@ def test_the_shortened_searches_miss_no_row(D):
         filt.apply(q, p, a_nom, f, grid=ladder[::-1])
     with pytest.raises(ValueError, match="separation has shape"):
         filt.apply(q, p, a_nom, f, separation=sep[0])
+
+
+def test_the_ladder_builds_only_the_grids_the_searches_need():
+    """A settled (rigidly moving) flock searches the finest grid only, and the next step
+    builds only that one; a UAV 60 m/s off the flock's motion needs the coarsest."""
+    core = PairFlockCore(make_config("large", n_uavs=400, **SWARM))
+    core.reset(seed=1)
+    stage, zero = core.safety, np.zeros((1, core.n_agents, 2))
+    core.p[:] = core.p.mean(1, keepdims=True)
+    core.step(zero)
+    assert stage.filter.search_reach <= LADDER_REACH * stage.grids[0].cell_size
+    assert stage._levels == 1
+    core.p[:] = core.p.mean(1, keepdims=True)
+    fast = np.setdiff1d(np.arange(400), core.agent_uavs)[0]  # an unpaired UAV
+    core.p[0, fast] += 60.0
+    core.step(zero)  # (on the finest grid: slower, the same commands)
+    assert stage.filter.search_reach > LADDER_REACH * stage.grids[1].cell_size
+    assert stage._levels == 3
 
 
 def test_core_on_the_grid_flies_the_all_pairs_trajectories():

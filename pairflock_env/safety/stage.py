@@ -27,6 +27,7 @@ from pairflock_env.config.sections.safety import (
 )
 from pairflock_env.safety.cbf.barrier import SafetyFilter, SafetyOutput
 from pairflock_env.safety.cbf.params import SafetyParams
+from pairflock_env.safety.cbf.search import LADDER_REACH
 from pairflock_env.safety.cbf.swarm import SwarmFilter, SwarmOutput
 from pairflock_env.swarm.grid import NeighborGrid
 from pairflock_env.task.infos import SAFETY_INFO_KEYS, SAFETY_SWARM_INFO_KEYS
@@ -180,6 +181,10 @@ class SwarmStage(NoFilterStage):
         if config.uses_grid:
             h = SWARM_CELL * params.barrier_distance
             self.grids = tuple(NeighborGrid(B, N, D, cell_size=h * LADDER**k) for k in range(3))
+        #: how many grids of the ladder the next apply builds: those the last one's longest
+        #: search needed (a settled flock needs the finest only; a search beyond the built
+        #: ones takes the coarsest built, slower, with the same result)
+        self._levels = len(self.grids)
 
     def apply(self, q, p, flock_acc, u, grid=None) -> np.ndarray:
         """Filter every UAV's whole command a = f (+ u on the agents); returns the agents'
@@ -187,10 +192,14 @@ class SwarmStage(NoFilterStage):
         core's) is not used: the layer searches its own finer grid."""
         a = flock_acc.copy()
         a[:, self.agent_uavs] += u
-        for g in self.grids:
+        ladder = self.grids[: self._levels]
+        for g in ladder:
             g.build(q)
         sep = self._separation
-        out = self.filter.apply(q, p, a, flock_acc, self.output, self.grids or None, sep)
+        out = self.filter.apply(q, p, a, flock_acc, self.output, ladder or None, sep)
+        if ladder:
+            reach = self.filter.search_reach  # a search uses a grid whose cells are >= reach/3
+            self._levels = 1 + sum(reach > LADDER_REACH * g.cell_size for g in self.grids[:-1])
         self.whole_command = out.a
         return out.u.copy()
 

@@ -9,6 +9,12 @@ the swarm's largest speed relative to its mean is safe but loose while a spread 
 contracts: each UAV is then fast relative to the mean but nearly at its neighbours' speed,
 and searches reached 100 m. The affine fit keeps what neighbours share.
 
+Three more shortcuts, each giving the same hits: the radii are tabulated per step at a few
+residual levels; the fastest 5 % of the unpaired UAVs (the outliers, whose residuals would
+set every search's reach) search once for everyone and leave contact lists, so that the
+others search only as far as the 95th-percentile residual needs; and a search shorter than
+the UAV's nearest neighbour (the flocking pass's ``min_d2``) is skipped.
+
 numba's on-disk cache keys a compiled function on its own file only: after editing this
 module, clear the numba cache (the ``__pycache__`` folders) before trusting a run.
 """
@@ -24,6 +30,7 @@ from pairflock_env.swarm.grid import order_indices, within_radius
 __all__ = [
     "FIT_ROWS",
     "GRID",
+    "LADDER_REACH",
     "OUTLIER_SHARE",
     "RADIUS_LEVELS",
     "SCAN",
@@ -214,7 +221,7 @@ def shortened(r2, far, fld, e_i):
 #: a search uses the finest grid of the ladder whose block reaches at most this many cells
 #: from the query's cell (the cells visited grow as its cube; the UAVs checked, as the
 #: coarser cells hold more of them)
-_LADDER_REACH = 3.0
+LADDER_REACH = 3.0
 
 
 @jit_kernel
@@ -254,10 +261,10 @@ def _d2_hit(q, b, j, pt, r2, exclude):
 @jit_inline
 def _sweep(q, b, pt, r2, exclude, xs, hits):
     """The scan's hits around UAV ``exclude`` (at ``pt``) from the x-sorted order ``xs`` =
-    (order, pos, mark): walking out both ways from it until the x offset alone reaches the
+    (order, pos, mark, reach): walking out both ways from it until the x offset alone reaches the
     radius. Rounding keeps that exact: x - x_i grows along the order, and a squared
     distance is never below its first term."""
-    order, pos, mark = xs
+    order, pos, mark, _ = xs
     n = 0
     s0 = pos[exclude]
     for t in range(s0, q.shape[1]):
@@ -300,15 +307,17 @@ def candidates(q, b, i, r2, mode, gs, xs, sep, hits):
     ``sep`` (B, N): each UAV's squared distance to its nearest neighbour other than its
     partner (the flocking pass's ``min_d2`` of this q; zeros when unknown). Under GRID and
     SWEEP (a finite swarm) a radius below it finds nobody but perhaps the partner, which
-    is paired and never a candidate: the search is skipped, as most are in a settled flock."""
+    is paired and never a candidate: the search is skipped, as most are in a settled flock.
+    ``xs[3]`` (1,): the largest r2 a grid search used (which grids the ladder needs)."""
     pt = q[b, i]
     if mode != SCAN and r2 < sep[b, i] * _SEP_SHARE:
         return 0
     if mode == GRID:
+        xs[3][0] = max(xs[3][0], r2)
         g0, g1, g2 = gs
-        if r2 <= (_LADDER_REACH * g0.h) ** 2:
+        if r2 <= (LADDER_REACH * g0.h) ** 2:
             return within_radius(q, b, pt, r2, i, g0, hits)
-        if r2 <= (_LADDER_REACH * g1.h) ** 2:
+        if r2 <= (LADDER_REACH * g1.h) ** 2:
             return within_radius(q, b, pt, r2, i, g1, hits)
         return within_radius(q, b, pt, r2, i, g2, hits)
     if mode == SWEEP:

@@ -188,6 +188,9 @@ class SwarmFilter:
         #: (B, N) each swarm's UAVs in increasing x as the last step left them (searches
         #: without a grid walk it; kept across steps, so sorting it again is near O(N))
         self._xorder = np.zeros((0, N), np.int64)
+        self._reach = np.zeros(1)
+        #: the radius (m) of the longest grid search of the last :meth:`apply` (0: none)
+        self.search_reach = 0.0
         self._solver = (np.zeros((4, 4, 4)), np.zeros(5, np.int64), np.zeros((K, 3)),
                         np.zeros(K), np.zeros(K, np.int64), np.zeros(N))  # fmt: skip
 
@@ -248,7 +251,9 @@ class SwarmFilter:
             self._xorder = np.tile(np.arange(N, dtype=np.int64), (B, 1))
             self._unknown = np.zeros((B, N))
         sep = self._unknown if separation is None else _separation(separation, (B, N))
-        work = (*self._work, self._xorder)
+        self._reach[0] = 0.0
+        work = (*self._work, self._reach, self._xorder)
         swarm_kernel(q, p, a_nom, f, self._ints, self._reals, self._pr, grid is not None,
                      tuple(gs), sep, out.arrays(), work, self._solver)  # fmt: skip
+        self.search_reach = float(np.sqrt(self._reach[0]))
         return out

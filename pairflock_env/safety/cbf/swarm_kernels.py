@@ -272,10 +272,10 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, sep, outs, w
     paired, mate, agents, coop_u, coop_p, slot = ints
     alpha, bound, abound = reals
     a_out, u_out, active, corr, infeas, hmin = outs
-    hits, cstart, cnt, clist, G, rhs, vec, fit, res, table, pos, mark, outl, xorder = work
+    hits, cstart, cnt, clist, G, rhs, vec, fit, res, table, pos, mark, outl, reach, xorder = work
     table_t, hist, ostart, ocnt, olist = outl
     ocon = (ostart, ocnt, olist)
-    xs = (xorder[b], pos, mark)
+    xs = (xorder[b], pos, mark, reach)
     D = q.shape[2]
     mode = SCAN
     if use_grid and _grid_usable(q, p, b, gs[0]):
@@ -375,8 +375,9 @@ def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, gs, sep, outs, work,
             vec (VEC_ROWS, 3), fit (FIT_ROWS, 3), res (N,), table (RADIUS_LEVELS + 1,),
             pos (N,), mark (N // 64 + 2,) uint64 zeros, outl (table_t like table, hist
             (RADIUS_LEVELS + 1,) int, ostart (N + 1,), ocnt (N,), olist (any,) int: the
-            outlier split's scratch), xorder (B, N): each swarm's UAVs in x order, kept
-            across calls).
+            outlier split's scratch), reach (1,): the largest r2 of a grid search (to be
+            zeroed by the caller), xorder (B, N): each swarm's UAVs in x order, kept across
+            calls).
         solver: (W (4, 4, 4), idx (5,), Gw, bw, ws, marg) of :func:`~.kernels._solve_ws`.
     """
     for b in range(q.shape[0]):
