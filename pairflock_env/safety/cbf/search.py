@@ -38,6 +38,7 @@ __all__ = [
     "candidates",
     "outlier_contacts",
     "outlier_level",
+    "prefix_sums",
     "radius_table",
     "search_radius",
     "shortened",
@@ -259,30 +260,30 @@ def _d2_hit(q, b, j, pt, r2, exclude):
 
 
 @jit_inline
+def _walk(q, b, pt, r2, exclude, order, start, stop, step, hits, n):
+    """The scan's hits among order[start:stop:step] into hits[n:], until the x offset alone
+    reaches the radius; returns the new count."""
+    for t in range(start, stop, step):
+        j = order[t]
+        x = q[b, j, 0] - pt[0]
+        if x * x >= r2:
+            break
+        if _d2_hit(q, b, j, pt, r2, exclude):
+            hits[n] = j
+            n += 1
+    return n
+
+
+@jit_inline
 def _sweep(q, b, pt, r2, exclude, xs, hits):
     """The scan's hits around UAV ``exclude`` (at ``pt``) from the x-sorted order ``xs`` =
-    (order, pos, mark, reach): walking out both ways from it until the x offset alone reaches the
-    radius. Rounding keeps that exact: x - x_i grows along the order, and a squared
-    distance is never below its first term."""
+    (order, pos, mark, reach): walking out both ways from it until the x offset alone
+    reaches the radius. Rounding keeps that exact: x - x_i grows along the order, and a
+    squared distance is never below its first term."""
     order, pos, mark, _ = xs
-    n = 0
     s0 = pos[exclude]
-    for t in range(s0, q.shape[1]):
-        j = order[t]
-        x = q[b, j, 0] - pt[0]
-        if x * x >= r2:
-            break
-        if _d2_hit(q, b, j, pt, r2, exclude):
-            hits[n] = j
-            n += 1
-    for t in range(s0 - 1, -1, -1):
-        j = order[t]
-        x = q[b, j, 0] - pt[0]
-        if x * x >= r2:
-            break
-        if _d2_hit(q, b, j, pt, r2, exclude):
-            hits[n] = j
-            n += 1
+    n = _walk(q, b, pt, r2, exclude, order, s0, q.shape[1], 1, hits, 0)
+    n = _walk(q, b, pt, r2, exclude, order, s0 - 1, -1, -1, hits, n)
     return order_indices(hits, n, mark)
 
 
@@ -358,6 +359,15 @@ def tabulated(table, de, L, e_i):
     return table[min(max(lv, 0), L)]
 
 
+@jit_inline
+def prefix_sums(start, cnt, N):
+    """Turn the counts start[1:N + 1] of a count-then-fill list into its offsets, and set
+    each row's fill cursor cnt[i] to its start."""
+    for i in range(N):
+        start[i + 1] += start[i]
+        cnt[i] = start[i]
+
+
 #: the share of a swarm's unpaired UAVs whose residual bounds the others' searches; the
 #: fastest rest (the "outliers") search for their rows against the others themselves
 #: (:func:`outlier_contacts`)
@@ -414,9 +424,7 @@ def outlier_contacts(q, b, paired, res, e_t, table, de, L, mode, gs, xs, sep, hi
                     olist[ocnt[i]] = j
                     ocnt[i] += 1
         if fill == 0:
-            for i in range(N):
-                ostart[i + 1] += ostart[i]
-                ocnt[i] = ostart[i]
+            prefix_sums(ostart, ocnt, N)
             if ostart[N] > olist.shape[0]:
                 for i in range(N + 1):
                     ostart[i] = 0

@@ -56,6 +56,7 @@ from pairflock_env.safety.cbf.search import (
     candidates,
     outlier_contacts,
     outlier_level,
+    prefix_sums,
     radius_table,
     shortened,
     sort_by_x,
@@ -181,9 +182,7 @@ def _contacts(q, p, b, paired, agents, alpha, bound, abound, pr, mode, gs, xs, s
                     clist[cnt[i]] = j
                     cnt[i] += 1
         if fill == 0:
-            for i in range(N):
-                cstart[i + 1] += cstart[i]
-                cnt[i] = cstart[i]
+            prefix_sums(cstart, cnt, N)
 
 
 @jit_inline
