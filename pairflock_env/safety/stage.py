@@ -189,7 +189,7 @@ class SwarmStage(NoFilterStage):
     def apply(self, q, p, flock_acc, u, grid=None) -> np.ndarray:
         """Filter every UAV's whole command a = f (+ u on the agents); returns the agents'
         pair commands a - f (B, M, dim) and sets :attr:`whole_command`. ``grid`` (the
-        core's) is not used: the layer searches its own finer grid."""
+        core's) is not used: the layer searches its own ladder of finer grids."""
         a = flock_acc.copy()
         a[:, self.agent_uavs] += u
         ladder = self.grids[: self._levels]
