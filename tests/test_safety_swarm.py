@@ -240,8 +240,8 @@ def test_the_velocity_field_bounds_every_relative_speed(D):
 
 
 def test_the_search_radius_leaves_out_only_what_the_skip_drops():
-    """far_radius(k d + c) <= d for every d between the search radius and R (a fine sweep),
-    and the radius is no larger than the plain bound at speed k R + c."""
+    """far_radius(k d + c) <= d for every d between the search radius and R (a fine sweep);
+    the radius is at least the skip's radius at speed c, and tight: 0.2 % shorter fails."""
     P = SafetyParams(accel_limit=100.0)
     filt = _filter(P, [0, 1], 10, [1, 0])
     far = _far_of(filt._pr, 16.0, 16.0, 20.0, 0.0, 20.0, 20.0)
@@ -250,7 +250,7 @@ def test_the_search_radius_leaves_out_only_what_the_skip_drops():
         assert _far_radius(c, far) <= r <= R
         d = np.linspace(r, R, 4001)
         assert all(_far_radius(kn * x + c, far) <= x for x in d)
-        if r < R:  # and no shorter radius would do (to the bisection's tolerance)
+        if r < R:  # no shorter radius would do (to the root's or the bisection's tolerance)
             x = r * (1 - 2e-3)
             assert _far_radius(kn * x + c, far) > x
 
