@@ -268,6 +268,7 @@ def test_the_x_sweep_finds_what_the_scan_finds(D):
     pos, mark = np.zeros(N, np.int64), np.zeros(N // 64 + 2, np.uint64)
     hits, ref = np.zeros(N + 1, np.int64), np.zeros(N + 1, np.int64)
     gs = (NeighborGrid(1, 1, D, cell_size=1.0).build(np.zeros((1, 1, D))).arrays,) * 3
+    gs += (np.zeros(1),)  # the ladder's reach
     unknown = np.zeros((B, N))
     for _ in range(3):  # steps
         d2 = ((q[:, :, None] - q[:, None]) ** 2).sum(-1) + np.where(np.eye(N), np.inf, 0.0)
@@ -275,7 +276,7 @@ def test_the_x_sweep_finds_what_the_scan_finds(D):
         for b in range(B):
             assert sort_by_x(q, p, b, order[b], pos)
             assert (np.diff(q[b, order[b], 0]) >= 0).all()
-            xs = (order[b], pos, mark, np.zeros(1))
+            xs = (order[b], pos, mark)
             for i in range(N):
                 r2 = rng.uniform(0.0, 15.0) ** 2
                 m = candidates(q, b, i, r2, SCAN, gs, xs, unknown, ref)

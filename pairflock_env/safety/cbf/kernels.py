@@ -639,17 +639,22 @@ def _with_partner(hits, nh, mate):
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _grid_usable(q, p, b, g):
-    """Whether swarm b may take its candidates from the grid: the grid holds it, and every
-    position and velocity is finite with |p| < 1e150, so that no pair the grid skips could
-    have made the scan of all N stop at a non-finite distance or speed."""
-    if not g.ok[b]:
-        return False
+def _scan_free(q, p, b):
+    """Whether a search of swarm b may skip UAVs the scan of all N would visit: every
+    position and velocity is finite with |p| < 1e150, so that no skipped pair could have
+    made the scan stop at a non-finite distance or speed."""
     for j in range(q.shape[1]):
         for k in range(q.shape[2]):
             if not (np.isfinite(q[b, j, k]) and abs(p[b, j, k]) < 1e150):
                 return False
     return True
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def _grid_usable(q, p, b, g):
+    """Whether swarm b may take its candidates from the grid: the grid holds it, and
+    :func:`_scan_free`."""
+    return g.ok[b] and _scan_free(q, p, b)
 
 
 @njit(cache=True, nogil=True, _nrt=False)

@@ -24,8 +24,8 @@ from __future__ import annotations
 import numpy as np
 
 from pairflock_env.kernels import jit_inline, jit_kernel
-from pairflock_env.safety.cbf.kernels import _far_radius
-from pairflock_env.swarm.grid import order_indices, within_radius
+from pairflock_env.safety.cbf.kernels import _far_radius, _scan_free
+from pairflock_env.swarm.grid import _point_d2, order_indices, within_radius
 
 __all__ = [
     "FIT_ROWS",
@@ -38,6 +38,7 @@ __all__ = [
     "candidates",
     "outlier_contacts",
     "outlier_level",
+    "outlier_split",
     "prefix_sums",
     "radius_table",
     "search_radius",
@@ -229,13 +230,11 @@ LADDER_REACH = 3.0
 def sort_by_x(q, p, b, order, pos):
     """Put ``order`` (swarm b's UAVs, as left by the last step) in increasing x by insertion,
     O(N) while the flock moves little between steps, and its inverse into ``pos``. Returns
-    False, leaving both, when a position is not finite or a speed reaches 1e150: then only
-    the scan of all N stops where the pair filter's scan would (as for the grid)."""
+    False, leaving both, unless :func:`~.kernels._scan_free` (the grid's test too): then
+    only the scan of all N stops where the pair filter's scan would."""
     N = q.shape[1]
-    for j in range(N):
-        for k in range(q.shape[2]):
-            if not (np.isfinite(q[b, j, k]) and abs(p[b, j, k]) < 1e150):
-                return False
+    if not _scan_free(q, p, b):
+        return False
     for t in range(1, N):
         j = order[t]
         x = q[b, j, 0]
@@ -251,12 +250,8 @@ def sort_by_x(q, p, b, order, pos):
 
 @jit_inline
 def _d2_hit(q, b, j, pt, r2, exclude):
-    """Whether UAV j is a hit: the scan's test, the same operations."""
-    d2 = 0.0
-    for k in range(q.shape[2]):
-        x = q[b, j, k] - pt[k]
-        d2 += x * x
-    return j != exclude and d2 < r2
+    """Whether UAV j is a hit: the test of the grid's scan, the same operations."""
+    return j != exclude and _point_d2(q, b, j, pt) < r2
 
 
 @jit_inline
@@ -277,10 +272,10 @@ def _walk(q, b, pt, r2, exclude, order, start, stop, step, hits, n):
 @jit_inline
 def _sweep(q, b, pt, r2, exclude, xs, hits):
     """The scan's hits around UAV ``exclude`` (at ``pt``) from the x-sorted order ``xs`` =
-    (order, pos, mark, reach): walking out both ways from it until the x offset alone
+    (order, pos, mark): walking out both ways from it until the x offset alone
     reaches the radius. Rounding keeps that exact: x - x_i grows along the order, and a
     squared distance is never below its first term."""
-    order, pos, mark, _ = xs
+    order, pos, mark = xs
     s0 = pos[exclude]
     n = _walk(q, b, pt, r2, exclude, order, s0, q.shape[1], 1, hits, 0)
     n = _walk(q, b, pt, r2, exclude, order, s0 - 1, -1, -1, hits, n)
@@ -301,21 +296,21 @@ _SEP_SHARE = 1.0 - 1e-12
 def candidates(q, b, i, r2, mode, gs, xs, sep, hits):
     """The UAVs of swarm b closer than sqrt(r2) to UAV i (itself left out) into ``hits``,
     in increasing index; returns their count. ``mode``: SCAN (all N), GRID (the finest grid
-    of the ladder ``gs`` whose cells are at least a third of the radius; fine to coarse,
-    all built from q) or SWEEP (the x-sorted order ``xs`` of :func:`sort_by_x`). Every
-    mode gives the same list.
+    of the ladder ``gs`` = (g0, g1, g2, reach) whose cells are at least a third of the
+    radius; grids fine to coarse, all built from q; reach (1,) keeps the largest r2 a grid
+    search used, which grids the next step needs) or SWEEP (the x-sorted order ``xs`` of
+    :func:`sort_by_x`). Every mode gives the same list.
 
     ``sep`` (B, N): each UAV's squared distance to its nearest neighbour other than its
     partner (the flocking pass's ``min_d2`` of this q; zeros when unknown). Under GRID and
     SWEEP (a finite swarm) a radius below it finds nobody but perhaps the partner, which
-    is paired and never a candidate: the search is skipped, as most are in a settled flock.
-    ``xs[3]`` (1,): the largest r2 a grid search used (which grids the ladder needs)."""
+    is paired and never a candidate: the search is skipped, as most are in a settled flock."""
     pt = q[b, i]
     if mode != SCAN and r2 < sep[b, i] * _SEP_SHARE:
         return 0
     if mode == GRID:
-        xs[3][0] = max(xs[3][0], r2)
-        g0, g1, g2 = gs
+        g0, g1, g2, reach = gs
+        reach[0] = max(reach[0], r2)
         if r2 <= (LADDER_REACH * g0.h) ** 2:
             return within_radius(q, b, pt, r2, i, g0, hits)
         if r2 <= (LADDER_REACH * g1.h) ** 2:
@@ -430,3 +425,26 @@ def outlier_contacts(q, b, paired, res, e_t, table, de, L, mode, gs, xs, sep, hi
                     ostart[i] = 0
                 return False
     return True
+
+
+@jit_inline
+def outlier_split(q, b, paired, res, r2, far, fld, table, de, L, split, mode, gs, xs, sep,
+                  hits, outl):  # fmt: skip
+    """The outlier split of swarm b when ``split`` (a finite swarm on the grid or the x order,
+    with the far-UAV skip on) and the outliers' lists fit: (e_t, table_t, de_t, L_t), the
+    non-outliers' residual bound and radius table (:func:`radius_table` of ``outl[0]``
+    against e_t), the contact lists in ``outl``. Else (inf, table, de, L) and empty lists:
+    every unpaired UAV searches out to every residual."""
+    table_t, hist, ostart, ocnt, olist = outl
+    N = q.shape[1]
+    if split:
+        e_t = outlier_level(res, paired, de, L, hist)
+        if e_t < np.inf:
+            de_t, L_t = radius_table(r2, far, (fld[0], e_t, fld[2]), table_t, N)
+            ocon = (ostart, ocnt, olist)
+            if outlier_contacts(q, b, paired, res, e_t, table, de, L, mode, gs, xs, sep, hits,
+                                ocon):  # fmt: skip
+                return e_t, table_t, de_t, L_t
+    for i in range(N + 1):
+        ostart[i] = 0
+    return np.inf, table, de, L

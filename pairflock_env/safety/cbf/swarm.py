@@ -91,6 +91,23 @@ def _separation(x: npt.ArrayLike, shape: tuple[int, int]) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=np.float64)
 
 
+def _scratch(N: int, M: int) -> tuple[tuple, tuple]:
+    """The kernel's scratch for N UAVs with M agents: ``work`` (but the x order, which
+    depends on B) and ``solver`` (:func:`~pairflock_env.safety.cbf.swarm_kernels.swarm_kernel`)."""
+    K = WS_MAX + WS_ADD
+    i64 = np.int64
+    levels = RADIUS_LEVELS + 1
+    outliers = (np.zeros(levels), np.zeros(levels, i64), np.zeros(N + 1, i64), np.zeros(N, i64),
+                np.zeros(OUTLIER_CONTACTS * N + 64, i64))  # fmt: skip
+    work = (np.zeros(N + 1, i64), np.zeros(N + 1, i64), np.zeros(N, i64),
+            np.zeros(max(N * M, 1), i64), np.zeros((N, 3)), np.zeros(N), np.zeros((VEC_ROWS, 3)),
+            np.zeros((FIT_ROWS, 3)), np.zeros(N), np.zeros(levels), np.zeros(N, i64),
+            np.zeros(N // 64 + 2, np.uint64), outliers)  # fmt: skip
+    solver = (np.zeros((4, 4, 4)), np.zeros(5, i64), np.zeros((K, 3)), np.zeros(K),
+              np.zeros(K, i64), np.zeros(N))  # fmt: skip
+    return work, solver
+
+
 class SwarmFilter:
     """The swarm layer over B swarms of N UAVs.
 
@@ -163,36 +180,13 @@ class SwarmFilter:
             pair_alone=float(self.pair_alone),
             skip_far=1.0,
         )
-        K = WS_MAX + WS_ADD
-        self._work = (
-            np.zeros(N + 1, np.int64),
-            np.zeros(N + 1, np.int64),
-            np.zeros(N, np.int64),
-            np.zeros(max(N * M, 1), np.int64),
-            np.zeros((N, 3)),
-            np.zeros(N),
-            np.zeros((VEC_ROWS, 3)),
-            np.zeros((FIT_ROWS, 3)),
-            np.zeros(N),
-            np.zeros(RADIUS_LEVELS + 1),
-            np.zeros(N, np.int64),
-            np.zeros(N // 64 + 2, np.uint64),
-            (
-                np.zeros(RADIUS_LEVELS + 1),
-                np.zeros(RADIUS_LEVELS + 1, np.int64),
-                np.zeros(N + 1, np.int64),
-                np.zeros(N, np.int64),
-                np.zeros(OUTLIER_CONTACTS * N + 64, np.int64),
-            ),
-        )
+        self._work, self._solver = _scratch(N, M)
         #: (B, N) each swarm's UAVs in increasing x as the last step left them (searches
         #: without a grid walk it; kept across steps, so sorting it again is near O(N))
         self._xorder = np.zeros((0, N), np.int64)
         self._reach = np.zeros(1)
         #: the radius (m) of the longest grid search of the last :meth:`apply` (0: none)
         self.search_reach = 0.0
-        self._solver = (np.zeros((4, 4, 4)), np.zeros(5, np.int64), np.zeros((K, 3)),
-                        np.zeros(K), np.zeros(K, np.int64), np.zeros(N))  # fmt: skip
 
     def allocate(self, num_swarms: int, dim: int) -> SwarmOutput:
         """Output arrays for ``num_swarms`` swarms in ``dim`` dimensions."""
@@ -252,8 +246,8 @@ class SwarmFilter:
             self._unknown = np.zeros((B, N))
         sep = self._unknown if separation is None else _separation(separation, (B, N))
         self._reach[0] = 0.0
-        work = (*self._work, self._reach, self._xorder)
         swarm_kernel(q, p, a_nom, f, self._ints, self._reals, self._pr, grid is not None,
-                     tuple(gs), sep, out.arrays(), work, self._solver)  # fmt: skip
+                     (*gs, self._reach), sep, out.arrays(), (*self._work, self._xorder),
+                     self._solver)  # fmt: skip
         self.search_reach = float(np.sqrt(self._reach[0]))
         return out

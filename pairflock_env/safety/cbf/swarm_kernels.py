@@ -54,8 +54,7 @@ from pairflock_env.safety.cbf.search import (
     SCAN,
     SWEEP,
     candidates,
-    outlier_contacts,
-    outlier_level,
+    outlier_split,
     prefix_sums,
     radius_table,
     shortened,
@@ -271,15 +270,14 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, sep, outs, w
     paired, mate, agents, coop_u, coop_p, slot = ints
     alpha, bound, abound = reals
     a_out, u_out, active, corr, infeas, hmin = outs
-    hits, cstart, cnt, clist, G, rhs, vec, fit, res, table, pos, mark, outl, reach, xorder = work
-    table_t, hist, ostart, ocnt, olist = outl
-    ocon = (ostart, ocnt, olist)
-    xs = (xorder[b], pos, mark, reach)
+    hits, cstart, cnt, clist, G, rhs, vec, fit, res, table, pos, mark, outl, xorder = work
+    ocon = outl[2:]
+    xs = (xorder[b], pos, mark)
     D = q.shape[2]
     mode = SCAN
     if use_grid and _grid_usable(q, p, b, gs[0]):
         mode = GRID
-    elif not use_grid and sort_by_x(q, p, b, xorder[b], xs[1]):
+    elif not use_grid and sort_by_x(q, p, b, xorder[b], pos):
         mode = SWEEP
     a_u, U_u, a_p = _class_values(paired, alpha, bound)
     Au, Ap = _abounds(f, b, paired, bound, abound)
@@ -295,24 +293,13 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, sep, outs, w
                   far_up, a_u, Au, fld, res, cstart, cnt, clist)  # fmt: skip
     rows = (paired, mate, agents, coop_u, coop_p, cstart, clist)
     prune = pr[_S.skip_far] != 0.0
-    de, L = (
-        radius_table(pr[_S.swarm_radius2], far_uu, fld, table, q.shape[1]) if prune else (0.0, 0)
-    )
-    # the outlier split (module docstring of .search): the unpaired UAVs at most e_t search
-    # with e_t for every other residual, and the few above it find their rows for them
-    e_t, de_t, L_t = np.inf, de, L
-    if prune and mode != SCAN:
-        e_t = outlier_level(res, paired, de, L, hist)
-    if e_t < np.inf:
-        fld_t = (fld[0], e_t, fld[2])
-        de_t, L_t = radius_table(pr[_S.swarm_radius2], far_uu, fld_t, table_t, q.shape[1])
-        if not outlier_contacts(q, b, paired, res, e_t, table, de, L, mode, gs, xs, sep, hits,
-                                ocon):  # fmt: skip
-            e_t, de_t, L_t = np.inf, de, L
-    if e_t == np.inf:  # no split: every unpaired UAV searches out to every residual
-        table_t = table
-        for i in range(q.shape[1] + 1):
-            ostart[i] = 0
+    R2u = pr[_S.swarm_radius2]
+    de, L = radius_table(R2u, far_uu, fld, table, q.shape[1]) if prune else (0.0, 0)
+    # the unpaired UAVs at most e_t search with e_t for every other residual (table_t), the
+    # few above it (the outliers) out to every residual, finding their rows for the others
+    e_t, table_t, de_t, L_t = outlier_split(q, b, paired, res, R2u, far_uu, fld, table, de, L,
+                                            prune and mode != SCAN, mode, gs, xs, sep, hits,
+                                            outl)  # fmt: skip
     ctr = vec[_CTR]
     for i in range(q.shape[1]):
         U = bound[i]
@@ -332,7 +319,7 @@ def _filter_swarm(q, p, a_nom, f, b, ints, reals, pr, use_grid, gs, sep, outs, w
             if prune:
                 r2 = shortened(r2, far_u, fld, res[i])
         elif not prune:
-            r2 = pr[_S.swarm_radius2]
+            r2 = R2u
         elif res[i] > e_t:  # an outlier: out to every residual
             r2 = tabulated(table, de, L, res[i])
         else:
@@ -365,7 +352,8 @@ def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, gs, sep, outs, work,
             the paired ones), slot (N,) each UAV's agent column or -1).
         reals: (alpha (N,) brake, bound (N,) U_i, abound (N,) scratch).
         pr: :data:`SWARM` vector; use_grid, gs: three grids of q (GridArrays, fine to coarse;
-            the same grid thrice is valid) to search, or not.
+            the same grid thrice is valid) and reach (1,), the largest r2 a grid search
+            used (to be zeroed by the caller), to search, or not.
         sep: (B, N) each UAV's squared distance to its nearest non-partner UAV (zeros:
             unknown), for :func:`~.search.candidates` to skip searches shorter than it.
         outs: (a_out (B, N, dim), u_out (B, M, dim) the agents' x, active, correction,
@@ -374,9 +362,8 @@ def swarm_kernel(q, p, a_nom, f, ints, reals, pr, use_grid, gs, sep, outs, work,
             vec (VEC_ROWS, 3), fit (FIT_ROWS, 3), res (N,), table (RADIUS_LEVELS + 1,),
             pos (N,), mark (N // 64 + 2,) uint64 zeros, outl (table_t like table, hist
             (RADIUS_LEVELS + 1,) int, ostart (N + 1,), ocnt (N,), olist (any,) int: the
-            outlier split's scratch), reach (1,): the largest r2 of a grid search (to be
-            zeroed by the caller), xorder (B, N): each swarm's UAVs in x order, kept across
-            calls).
+            outlier split's scratch), xorder (B, N): each swarm's UAVs in x order, kept
+            across calls).
         solver: (W (4, 4, 4), idx (5,), Gw, bw, ws, marg) of :func:`~.kernels._solve_ws`.
     """
     for b in range(q.shape[0]):
