@@ -18,6 +18,7 @@ from pairflock_env.swarm.grid import (
     point_cell,
 )
 from pairflock_env.swarm.pair_pass import pair_pass
+from pairflock_env.swarm.slots import sort_indices
 from pairflock_env.swarm.spacing import place, redraw_conflicts
 
 
@@ -320,3 +321,23 @@ def test_within_radius_is_the_brute_force_answer_property(D):
 
     check()
     assert seen == {"scan", "grid, bitmap", "grid, insertion"}
+
+
+def test_sort_indices_by_rank_bitmap_and_radix():
+    """The candidate lists' sort: each of its three ways (short lists by rank, lists whose
+    indices span few bitmap words, long scattered lists by radix) gives np.sort and leaves
+    the bitmap zeroed."""
+    rng = np.random.default_rng(11)
+    for n_max in (100, 10_000, 200_000):
+        mark = np.zeros((n_max + 63) // 64, np.uint64)
+        tmp, hist = np.zeros(n_max, np.int64), np.zeros(256, np.int64)
+        for n in (0, 1, 7, 40, 41, 100, 1000, 5000):
+            if n > n_max:
+                continue
+            for spread in (True, False):  # scattered over all indices, or a narrow block
+                pool = n_max if spread else min(n_max, 2 * n + 3)
+                a = rng.permutation(pool)[:n].astype(np.int64) + (n_max - pool)
+                want = np.sort(a)
+                sort_indices(a, n, tmp, hist, mark, n_max)
+                assert a.tolist() == want.tolist()
+                assert not mark.any()

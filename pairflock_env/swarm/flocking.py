@@ -72,6 +72,7 @@ from pairflock_env.swarm.slots import (
     CP,
     CQ,
     CSLOT,
+    EXP,
     HIST,
     MD,
     NB,
@@ -84,7 +85,6 @@ from pairflock_env.swarm.slots import (
     ROW,
     SIZE,
     TMP,
-    TMP2,
     copy_slots,
     find,
     gather,
@@ -246,16 +246,30 @@ def _ellipse_hit(prm, a, e, z):
 
 
 @jit_inline
+def _gauss(prm, d2):
+    """exp(-rho^2 / sigma^2) of eq. 16 at squared distance d2 (libm's exponential: a call
+    the compiler cannot inline, so callers make it where few values are live)."""
+    return np.exp(-d2 * prm.inv_sigma2)
+
+
+@jit_inline
+def _weight(prm, d2, gauss, floor):
+    """The weight w = a - g_r(rho) of a pair at squared distance d2, from its
+    :func:`_gauss`. With the swarm layer's floor (floor_radius2 > 0) the repulsion closer
+    than rho* is at least F* rho* / rho (w multiplies q_j - q_i, of length rho)."""
+    w = prm.attraction - prm.repulsion * gauss
+    if floor and d2 < prm.floor_radius2 and d2 > 0.0:
+        w = min(w, -prm.floor_gain / d2)
+    return w
+
+
+@jit_inline
 def _pair_force(prm, d2, dq0, dq1, dq2, dp0, dp1, dp2, floor):
     """Eqs. 13-18: the force f_ij of neighbour j on UAV i at squared distance d2, from the
     offset dq = q_j - q_i and the relative velocity dp = p_j - p_i (three components; the
-    third is zero and unused in 2-D), and its weight w = a - g_r(||q_j - q_i||). Odd in
-    (dq, dp), so f_ji = -f_ij bit for bit. With the swarm layer's floor (floor_radius2 > 0)
-    the repulsion closer than rho* is at least F* rho* / rho (w multiplies q_j - q_i, of
-    length rho)."""
-    w = prm.attraction - prm.repulsion * np.exp(-d2 * prm.inv_sigma2)
-    if floor and d2 < prm.floor_radius2 and d2 > 0.0:
-        w = min(w, -prm.floor_gain / d2)
+    third is zero and unused in 2-D), and its weight w (:func:`_weight`). Odd in (dq, dp),
+    so f_ji = -f_ij bit for bit."""
+    w = _weight(prm, d2, _gauss(prm, d2), floor)
     return _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2), w
 
 
@@ -299,16 +313,15 @@ def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor, ellipse):
             hit = _ellipse_hit(prm, fw[CQ, c] - x0, fw[CQ + 1, c] - x1, fw[CQ + 2, c] - x2)
             nc += hit & (c != sx)
     fw[MD, s] = bits_float(m)
-    k = 0
-    for w in range((n + 63) >> 6):  # the neighbours, in increasing index
-        bits = np.uint64(0)
-        for t in range(64):  # (the row is long enough; what lies past n is left out)
-            c = 64 * w + t
-            bits |= np.uint64(row[c] < prm.radius2 and c < n) << np.uint64(t)
-        while bits != 0:
-            nb[k] = 64 * w + low_bit(bits)
-            bits &= bits - np.uint64(1)
-            k += 1
+    k = first = 0
+    for c in range(n):  # the neighbours, in increasing index (branch-free)
+        nb[k] = c
+        k += row[c] < prm.radius2
+    for t in range(k):  # those before x
+        first += nb[t] < sx
+    gauss = fw[EXP]
+    for t in range(k):  # the exponentials first: no live values to save around the calls
+        gauss[t] = _gauss(prm, row[nb[t]])
     f0, f1, f2 = fw[ACC, s], fw[ACC + 1, s], fw[ACC + 2, s] if three else 0.0
     for t in range(k):
         c = nb[t]
@@ -316,18 +329,19 @@ def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor, ellipse):
         dp2 = fw[CP + 2, c] - v2 if three else 0.0
         dq0, dq1 = fw[CQ, c] - x0, fw[CQ + 1, c] - x1
         dp0, dp1 = fw[CP, c] - v0, fw[CP + 1, c] - v1
-        g = _pair_force(prm, row[c], dq0, dq1, dq2, dp0, dp1, dp2, floor)[0]
+        w = _weight(prm, row[c], gauss[t], floor)
+        g = _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2)
         f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
     fw[ACC, s], fw[ACC + 1, s], fw[ACC + 2, s] = f0, f1, f2
     parent, size = iw[PARENT], iw[SIZE]
     # the interaction graph (over slots), each edge once: from x to the neighbours of
     # larger index, which follow x in the candidate list
-    first = 0
-    while first < k and nb[first] < sx:
-        first += 1
     root = find(parent, s)
+    cslot = iw[CSLOT]
     for t in range(first, k):
-        root = join(parent, size, root, iw[CSLOT, nb[t]])
+        sj = cslot[nb[t]]
+        if parent[sj] != root:  # (a child of x's root: joined already, join would say so)
+            root = join(parent, size, root, sj)
     return nc
 
 
@@ -337,7 +351,7 @@ def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
     three, floor, ellipse = _three(dims), _floor(dims), _ellipse(dims)
     N = q.shape[1]
     for i in range(N):  # slots, and the candidate list, in index order
-        iw[ORDER, i] = iw[CIDX, i] = iw[CSLOT, i] = i
+        iw[ORDER, i] = iw[CIDX, i] = i
     copy_slots(q, p, b, iw[ORDER], partner, acc, fw, iw, three)
     gather(N, fw, iw, three)
     nc = 0
@@ -444,7 +458,7 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
     N = q.shape[1]
     order = g.order[b]
     copy_slots(q, p, b, order, partner, acc, fw, iw, three)
-    cidx, cslot = iw[CIDX], iw[CSLOT]
+    cidx = iw[CIDX]
     nc = 0
     s = 0
     padded = g.n_ring[b] > 0
@@ -465,9 +479,9 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
         for t in range(n_bk):
             bk = g.buckets[t]
             for s2 in range(g.start[b, bk], g.start[b, bk + 1]):
-                cidx[n], cslot[n] = order[s2], s2
+                cidx[n] = order[s2]
                 n += 1
-        sort_indices(cidx, cslot, n, iw[TMP], iw[TMP2], iw[HIST], N)
+        sort_indices(cidx, n, iw[TMP], iw[HIST], g.mark, N)
         gather(n, fw, iw, three)
         for s2 in range(s, end):
             nc += _gather_uav(s2, order[s2], n, prm, fw, fwu, iw, three, floor, ellipse)
@@ -601,7 +615,7 @@ def flocking_runner(
             "velocity_mismatch": np.empty(B),
             "velocity_mismatch_max": np.empty(B),
             # scratch: see pairflock_env.swarm.slots
-            "_fw": np.zeros((MD + 1, 64 * words)),
+            "_fw": np.zeros((EXP + 1, 64 * words)),
             "_iw": np.zeros((HIST + 1, max(64 * words, 256)), np.int64),  # HIST: the last
         }
         out["_fwu"] = out["_fw"].view(np.uint64)

@@ -28,7 +28,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from pairflock_env.kernels import jit_inline, jit_kernel
+from pairflock_env.kernels import jit_inline, jit_kernel, low_bit
 
 __all__ = ["GridArrays", "NeighborGrid", "nearest_indices"]
 
@@ -398,34 +398,18 @@ def sort_ints(a, n):
         a[s] = x
 
 
-#: de Bruijn sequence and table: the index of the one set bit of a power of two w is
-#: _DEBRUIJN_INDEX[(w * _DEBRUIJN) >> 58] (multiplication modulo 2^64)
-_DEBRUIJN = np.uint64(0x03F79D71B4CB0A89)
-_DEBRUIJN_INDEX = np.zeros(64, np.int64)
-for _i in range(64):
-    _DEBRUIJN_INDEX[((1 << _i) * 0x03F79D71B4CB0A89) % 2**64 >> 58] = _i
-del _i
 #: lists longer than this are put in order through the bitmap, shorter ones by insertion
 _SORT_BITMAP = 24
 
 
 @jit_inline
-def order_indices(a, n, mark):
-    """Put the distinct indices a[:n] in increasing order and return n: an insertion sort
-    for short lists, else a pass through the bitmap ``mark`` (zeroed, one bit per index; left
-    zeroed), whose cost is n plus the words between the smallest and largest index, not n^2
-    or n log n (a repeated index would be kept once, and the count returned says so)."""
-    if n <= _SORT_BITMAP:
-        sort_ints(a, n)
-        return n
-    lo = a[0] >> 6
-    hi = lo
+def bitmap_sort(a, n, mark, lo, hi):
+    """Put the indices a[:n] in increasing order through the bitmap ``mark`` (zeroed, one
+    bit per index, left zeroed), whose words lo..hi hold them all; returns the number of
+    distinct indices (a repeated one is kept once). The cost is n plus hi - lo words."""
     one = np.uint64(1)
     for t in range(n):
-        k = a[t] >> 6
-        mark[k] |= one << np.uint64(a[t] & 63)
-        lo = min(lo, k)
-        hi = max(hi, k)
+        mark[a[t] >> 6] |= one << np.uint64(a[t] & 63)
     m = 0
     for k in range(lo, hi + 1):
         w = mark[k]
@@ -433,11 +417,25 @@ def order_indices(a, n, mark):
             continue
         mark[k] = 0
         while w != 0:
-            low = w & (~w + one)  # the lowest set bit
-            a[m] = 64 * k + _DEBRUIJN_INDEX[(low * _DEBRUIJN) >> np.uint64(58)]
+            a[m] = 64 * k + low_bit(w)
+            w &= w - one
             m += 1
-            w ^= low
     return m
+
+
+@jit_inline
+def order_indices(a, n, mark):
+    """Put the indices a[:n] in increasing order and return how many are distinct: an
+    insertion sort for short lists (distinct indices), else :func:`bitmap_sort`, whose cost
+    is n plus the words between the smallest and largest index, not n^2 or n log n."""
+    if n <= _SORT_BITMAP:
+        sort_ints(a, n)
+        return n
+    lo = hi = a[0]
+    for t in range(n):
+        lo = min(lo, a[t])
+        hi = max(hi, a[t])
+    return bitmap_sort(a, n, mark, lo >> 6, hi >> 6)
 
 
 @jit_inline

@@ -9,6 +9,7 @@ velocities and the forest a sweep touches lie in memory as the UAVs lie in space
 from __future__ import annotations
 
 from pairflock_env.kernels import jit_inline
+from pairflock_env.swarm.grid import bitmap_sort
 
 __all__ = [
     "copy_slots",
@@ -24,54 +25,70 @@ __all__ = [
 # Rows of the float scratch of a pass (each of length N rounded up to whole 64-bit words):
 # positions and velocities of every UAV in slot order, then of the current candidate list,
 # then the squared distances from one UAV to its candidates (and their bits, as uint64),
-# then each UAV's flocking command and separation in slot order.
-QS, PS, CQ, CP, ROW, ACC, MD = 0, 3, 6, 9, 12, 13, 16
+# then each UAV's flocking command and separation in slot order, then the exponentials of
+# one UAV's neighbours.
+QS, PS, CQ, CP, ROW, ACC, MD, EXP = 0, 3, 6, 9, 12, 13, 16, 17
 # Rows of the int scratch: the UAV in each slot (all pairs); the candidates' indices, their
 # slots and where each slot sits in the list; the union-find forest over
 # slots (parent, size); one UAV's neighbours (positions in the candidate list); scratch of
-# the sort (two rows); each UAV's partner in slot order; a histogram of 256 (the last row).
-ORDER, CIDX, CSLOT, POS_OF, PARENT, SIZE, NB, TMP, TMP2, PRT, HIST = range(11)
+# the sort; each UAV's partner in slot order; each UAV's slot (by index); a histogram of
+# 256 (the last row).
+ORDER, CIDX, CSLOT, POS_OF, PARENT, SIZE, NB, TMP, PRT, SLOT_OF, HIST = range(11)
 
 
-#: lists up to this long are sorted by rank (n^2 vectorised comparisons), longer ones by radix
+#: lists up to this long are sorted by rank (n^2 vectorised comparisons)
 _RANK_SORT = 40
 
 
 @jit_inline
-def sort_indices(a, v, n, tmp, tmp_v, hist, n_max):
-    """Sort the distinct indices a[:n] (each < n_max) in place, and v[:n] along with them,
-    at a cost that does not depend on the order they come in (an insertion sort's or a
-    bitmap's does, and a flight scrambles the order): short lists by rank (each index goes
-    where the count of smaller ones puts it; the counts vectorise), longer ones by a radix
-    sort of their bytes."""
+def sort_indices(a, n, tmp, hist, mark, n_max):
+    """Sort the distinct indices a[:n] (each < n_max) in place, at a cost that does not grow
+    with disorder (an insertion sort's does, and a flight scrambles the order): short lists
+    by rank (each index goes where the count of smaller ones puts it; the counts
+    vectorise); longer ones through the bitmap ``mark`` (zeroed, one bit per index; left
+    zeroed: :func:`~pairflock_env.swarm.grid.bitmap_sort`) when the words their indices
+    span are fewer than the radix sort's steps, else by a radix sort in as few passes of
+    as narrow digits as ``n_max`` allows (two passes of 7 bits below 16,384)."""
     if n <= _RANK_SORT:
         for i in range(n):
             x, r = a[i], 0
             for j in range(n):
                 r += a[j] < x
-            tmp[r], tmp_v[r] = x, v[i]
+            tmp[r] = x
         for i in range(n):
-            a[i], v[i] = tmp[i], tmp_v[i]
+            a[i] = tmp[i]
         return
-    shift = 0
-    src, dst, src_v, dst_v = a, tmp, v, tmp_v
-    while shift == 0 or (n_max - 1) >> shift > 0:
-        for d in range(256):
+    lo, hi = a[0], a[0]
+    for c in range(n):
+        lo = min(lo, a[c])
+        hi = max(hi, a[c])
+    lo, hi = lo >> 6, hi >> 6
+    bits = 1
+    while (n_max - 1) >> bits > 0:
+        bits += 1
+    passes = (bits + 7) >> 3
+    digit = (bits + passes - 1) // passes
+    if hi - lo < passes * (2 << digit):  # n + (hi - lo) steps against the passes'
+        bitmap_sort(a, n, mark, lo, hi)
+        return
+    size = 1 << digit
+    src, dst = a, tmp
+    for shift in range(0, digit * passes, digit):
+        for d in range(size):
             hist[d] = 0
         for c in range(n):
-            hist[(src[c] >> shift) & 255] += 1
+            hist[(src[c] >> shift) & (size - 1)] += 1
         total = 0
-        for d in range(256):
+        for d in range(size):
             total, hist[d] = total + hist[d], total
         for c in range(n):
-            d = (src[c] >> shift) & 255
-            dst[hist[d]], dst_v[hist[d]] = src[c], src_v[c]
+            d = (src[c] >> shift) & (size - 1)
+            dst[hist[d]] = src[c]
             hist[d] += 1
-        src, dst, src_v, dst_v = dst, src, dst_v, src_v
-        shift += 8
+        src, dst = dst, src
     if src is not a:
         for c in range(n):
-            a[c], v[c] = src[c], src_v[c]
+            a[c] = src[c]
 
 
 @jit_inline
@@ -81,6 +98,7 @@ def copy_slots(q, p, b, order, partner, acc, fw, iw, three):
     indices, so that the sweep reads and writes only memory in slot order."""
     for s in range(q.shape[1]):
         i = order[s]
+        iw[SLOT_OF, i] = s
         iw[PRT, s] = partner[i]
         for k in range(3 if three else 2):
             fw[QS + k, s] = q[b, i, k]
@@ -100,10 +118,10 @@ def put_slots(b, order, acc, min_d2, fw, three):
 
 @jit_inline
 def gather(n, fw, iw, three):
-    """The candidate list's positions and velocities (from their slots), and where each
-    candidate's slot sits in the list."""
+    """The candidate list's slots, positions and velocities (from their indices), and where
+    each candidate's slot sits in the list."""
     for c in range(n):
-        s = iw[CSLOT, c]
+        s = iw[CSLOT, c] = iw[SLOT_OF, iw[CIDX, c]]
         iw[POS_OF, s] = c
         for k in range(3 if three else 2):
             fw[CQ + k, c] = fw[QS + k, s]
