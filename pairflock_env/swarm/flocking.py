@@ -49,6 +49,7 @@ import numpy as np
 from pairflock_env.config import PairFlockConfig
 from pairflock_env.config.sections.flocking import repulsion_floor
 from pairflock_env.config.sections.reward import collision_ellipsoid
+from pairflock_env.exp import exp_lane, in_fast_range
 from pairflock_env.kernels import (
     BoundKernel,
     KernelParams,
@@ -246,17 +247,27 @@ def _ellipse_hit(prm, a, e, z):
 
 
 @jit_inline
-def _gauss(prm, d2):
-    """exp(-rho^2 / sigma^2) of eq. 16 at squared distance d2 (libm's exponential: a call
-    the compiler cannot inline, so callers make it where few values are live)."""
-    return np.exp(-d2 * prm.inv_sigma2)
+def _gauss_rows(prm, row, nb, k, gauss):
+    """gauss[t] = exp(-rho^2 / sigma^2) of eq. 16 at the squared distances row[nb[t]], t <
+    k: libm's exponential bit for bit, vectorised (:mod:`pairflock_env.exp`), with libm's
+    own call for the arguments outside its fast range (coincident UAVs, extreme configs)."""
+    slow = 0
+    for t in range(k):
+        x = -row[nb[t]] * prm.inv_sigma2
+        gauss[t] = exp_lane(x)
+        slow += not in_fast_range(x)
+    for t in range(k if slow else 0):
+        x = -row[nb[t]] * prm.inv_sigma2
+        if not in_fast_range(x):
+            gauss[t] = np.exp(x)
 
 
 @jit_inline
 def _weight(prm, d2, gauss, floor):
-    """The weight w = a - g_r(rho) of a pair at squared distance d2, from its
-    :func:`_gauss`. With the swarm layer's floor (floor_radius2 > 0) the repulsion closer
-    than rho* is at least F* rho* / rho (w multiplies q_j - q_i, of length rho)."""
+    """The weight w = a - g_r(rho) of a pair at squared distance d2, from its exponential
+    ``gauss`` (:func:`_gauss_rows`). With the swarm layer's floor (floor_radius2 > 0) the
+    repulsion closer than rho* is at least F* rho* / rho (w multiplies q_j - q_i, of length
+    rho)."""
     w = prm.attraction - prm.repulsion * gauss
     if floor and d2 < prm.floor_radius2 and d2 > 0.0:
         w = min(w, -prm.floor_gain / d2)
@@ -264,18 +275,11 @@ def _weight(prm, d2, gauss, floor):
 
 
 @jit_inline
-def _pair_force(prm, d2, dq0, dq1, dq2, dp0, dp1, dp2, floor):
-    """Eqs. 13-18: the force f_ij of neighbour j on UAV i at squared distance d2, from the
-    offset dq = q_j - q_i and the relative velocity dp = p_j - p_i (three components; the
-    third is zero and unused in 2-D), and its weight w (:func:`_weight`). Odd in (dq, dp),
-    so f_ji = -f_ij bit for bit."""
-    w = _weight(prm, d2, _gauss(prm, d2), floor)
-    return _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2), w
-
-
-@jit_inline
 def _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2):
-    """f_ij = w dq + b dp from the weight :func:`_pair_force` gave the pair."""
+    """Eqs. 13-18: the force f_ij = w dq + b dp of neighbour j on UAV i, from its weight w
+    (:func:`_weight`), the offset dq = q_j - q_i and the relative velocity dp = p_j - p_i
+    (three components; the third is zero and unused in 2-D). Odd in (dq, dp), so f_ji =
+    -f_ij bit for bit."""
     c = prm.consensus
     return w * dq0 + c * dp0, w * dq1 + c * dp1, w * dq2 + c * dp2
 
@@ -320,8 +324,7 @@ def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor, ellipse):
     for t in range(k):  # those before x
         first += nb[t] < sx
     gauss = fw[EXP]
-    for t in range(k):  # the exponentials first: no live values to save around the calls
-        gauss[t] = _gauss(prm, row[nb[t]])
+    _gauss_rows(prm, row, nb, k, gauss)  # the exponentials first, vectorised
     f0, f1, f2 = fw[ACC, s], fw[ACC + 1, s], fw[ACC + 2, s] if three else 0.0
     for t in range(k):
         c = nb[t]
@@ -376,7 +379,7 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
             fw[PS + k, i] = p[b, i, k]
         for w in range(lb.shape[1]):
             lb[i, w] = 0
-    row, parent, size = fw[ROW], iw[PARENT], iw[SIZE]
+    row, parent, size, nb, gauss = fw[ROW], iw[PARENT], iw[SIZE], iw[NB], fw[EXP]
     cq0, cq1, cp0, cp1 = fw[QS], fw[QS + 1], fw[PS], fw[PS + 1]
     cq2, cp2 = fw[QS + 2], fw[PS + 2]
     inf_bits = float_bits(np.inf)
@@ -423,8 +426,7 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
                     prm, wm[j, x], cq0[j] - x0, cq1[j] - x1, dq2, cp0[j] - v0, cp1[j] - v1, dp2
                 )
                 f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
-        root = find(parent, x)
-        bit_x = one << np.uint64(x & 63)
+        k = 0
         for w in range(lo >> 6, (N + 63) >> 6 if near else 0):  # neighbours after x, in order
             bits = np.uint64(0)
             rw, first = row[64 * w : min(64 * w + 64, N)], lo - 64 * w
@@ -432,16 +434,23 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
                 hit = (rw[t] < prm.radius2) & (t >= first)
                 bits |= np.uint64(hit) << np.uint64(t)
             while bits != 0:
-                j = 64 * w + low_bit(bits)
+                nb[k] = 64 * w + low_bit(bits)
                 bits &= bits - one
-                dq2 = cq2[j] - x2 if three else 0.0
-                dp2 = cp2[j] - v2 if three else 0.0
-                g, wm[x, j] = _pair_force(
-                    prm, row[j], cq0[j] - x0, cq1[j] - x1, dq2, cp0[j] - v0, cp1[j] - v1, dp2, floor
-                )
-                lb[j, x >> 6] |= bit_x
-                f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
-                root = join(parent, size, root, j)
+                k += 1
+        _gauss_rows(prm, row, nb, k, gauss)  # their exponentials first, vectorised
+        root = find(parent, x)
+        bit_x = one << np.uint64(x & 63)
+        for t in range(k):
+            j = nb[t]
+            dq2 = cq2[j] - x2 if three else 0.0
+            dp2 = cp2[j] - v2 if three else 0.0
+            wm[x, j] = w = _weight(prm, row[j], gauss[t], floor)
+            g = _weighted_force(
+                prm, w, cq0[j] - x0, cq1[j] - x1, dq2, cp0[j] - v0, cp1[j] - v1, dp2
+            )
+            lb[j, x >> 6] |= bit_x
+            f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
+            root = join(parent, size, root, j)
         acc[b, x, 0], acc[b, x, 1] = f0, f1
         if three:
             acc[b, x, 2] = f2
