@@ -251,9 +251,11 @@ def _gauss_rows(prm, row, nb, k, gauss):
     """gauss[t] = exp(-rho^2 / sigma^2) of eq. 16 at the squared distances row[nb[t]], t <
     k: libm's exponential bit for bit, vectorised (:mod:`pairflock_env.exp`), with libm's
     own call for the arguments outside its fast range (coincident UAVs, extreme configs)."""
+    for t in range(k):  # the distances first, so that the next loop reads only gauss[t]
+        gauss[t] = row[nb[t]]
     slow = 0
-    for t in range(k):
-        x = -row[nb[t]] * prm.inv_sigma2
+    for t in range(k):  # (this loop vectorises)
+        x = -gauss[t] * prm.inv_sigma2
         gauss[t] = exp_lane(x)
         slow += not in_fast_range(x)
     for t in range(k if slow else 0):
