@@ -31,6 +31,7 @@ from numba.extending import intrinsic
 __all__ = [
     "BoundKernel",
     "KernelParams",
+    "all_finite",
     "bits_float",
     "float_bits",
     "jit_inline",
@@ -74,6 +75,16 @@ class KernelParams:
     def unpack(self, vector: np.ndarray) -> dict[str, float]:
         """The named values of a packed vector (for tests and messages)."""
         return {n: float(vector[i]) for i, n in enumerate(self.names)}
+
+
+@jit_kernel
+def all_finite(a):
+    """Whether every element of the array ``a`` is finite: ``np.isfinite(a).all()`` without
+    its temporary array (a tenth of its time on the few actions of a step)."""
+    ok = True
+    for x in a.flat:
+        ok &= np.isfinite(x)
+    return ok
 
 
 class BoundKernel:

@@ -47,10 +47,22 @@ class ConstantVelocityLeader:
         self.dim = self.q0.shape[0]
 
     def state(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        if type(t) is not np.ndarray or t.dtype != np.float64:
-            t = np.asarray(t, dtype=np.float64)
-        q = self.q0 + t[:, None] * self.v
-        return q, self.v[None].repeat(t.shape[0], axis=0)
+        if type(t) is not np.ndarray or t.dtype != np.float64 or t.ndim != 1:
+            t = np.ascontiguousarray(t, dtype=np.float64).reshape(-1)
+        q = np.empty((t.shape[0], self.dim))
+        p = np.empty((t.shape[0], self.dim))
+        _constant_velocity_state(t, self.q0, self.v, q, p)
+        return q, p
+
+
+@njit(cache=True)
+def _constant_velocity_state(t, q0, v, q, p):
+    """q = q0 + t v, p = v for each swarm's time (one call: a numpy expression costs a few
+    microseconds at B = 1, this a fraction of one)."""
+    for b in range(t.shape[0]):
+        for k in range(q0.shape[0]):
+            q[b, k] = q0[k] + t[b] * v[k]
+            p[b, k] = v[k]
 
 
 # Gauss-Legendre nodes and weights on [0, 1] for the position integral inside a turn; the

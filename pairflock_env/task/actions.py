@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from pairflock_env.config.arrays import real_array
-from pairflock_env.kernels import jit_kernel
+from pairflock_env.kernels import all_finite, jit_kernel
 
 __all__ = ["add_pair_command", "check_pair_actions", "decode_pair_actions"]
 
@@ -36,7 +36,7 @@ def check_pair_actions(
             a = a[None]
         else:
             raise ValueError(f"actions have shape {a.shape}, expected ({B}, {M}, {D})")
-    if not np.isfinite(a).all():
+    if not all_finite(a):
         bad = np.argwhere(~np.isfinite(a).all(axis=-1))[0]
         raise ValueError(
             f"actions contain NaN or inf (swarm {bad[0]}, agent {bad[1]}, UAV "
