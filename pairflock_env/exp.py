@@ -19,6 +19,12 @@ equal the library's.
 Outside 2^-54 <= |x| < 512 (where the library takes its special paths: zero, tiny and huge
 arguments, NaN), callers fall back to ``np.exp``, which numba compiles to the library call:
 :func:`in_fast_range` says which.
+
+Elsewhere (another C library, another architecture, an x86-64 CPU without FMA, where
+glibc picks a build without fused operations) the results are still these, the same on
+every machine (LLVM's ``fma`` is exact even where it is not one instruction), but that
+library's own ``exp`` may differ from them in the last bit now and then; the test is skipped
+there.
 """
 
 from __future__ import annotations

@@ -3,12 +3,30 @@
 from __future__ import annotations
 
 import math
+import platform
+from pathlib import Path
 
 import numpy as np
 import pytest
 from numba import njit
 
 from pairflock_env.exp import exp_lane, in_fast_range
+
+
+def _glibc_fma() -> bool:
+    """Whether numba's exp is glibc's x86-64 build for FMA CPUs, the one exp.py follows."""
+    cpu = Path("/proc/cpuinfo")
+    return (
+        platform.machine() == "x86_64"
+        and platform.libc_ver()[0] == "glibc"
+        and cpu.exists()
+        and " fma " in cpu.read_text()
+    )
+
+
+pytestmark = pytest.mark.skipif(
+    not _glibc_fma(), reason="the bits are those of glibc's exp on x86-64 CPUs with FMA"
+)
 
 
 @njit(cache=False)
