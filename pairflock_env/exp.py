@@ -58,9 +58,9 @@ _TINY, _HUGE = 2.0**-54, 512.0
 
 def _table() -> tuple[np.ndarray, np.ndarray]:
     """T_k (float64) and the bits of H_k less k 2^45 (uint64), k = 0..127: H_k the double
-    nearest 2^(k/128), T_k = (2^(k/128) - H_k) / H_k rounded; 2^(k/128) to 400 bits by
+    nearest 2^(k/128), T_k = (2^(k/128) - H_k) / H_k rounded; 2^(k/128) to 160 bits by
     seven integer square roots (floors of floors are the floor of the root)."""
-    prec = 400
+    prec = 160
     tail = np.empty(1 << _BITS)
     scale = np.empty(1 << _BITS, np.uint64)
     for k in range(1 << _BITS):
