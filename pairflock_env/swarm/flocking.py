@@ -366,6 +366,26 @@ def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
     return nc // 2  # each pair was seen from both sides
 
 
+@jit_inline
+def _later_neighbors(prm, row, lo, N, nb):
+    """The UAVs j in [lo, N) closer than the radius (squared distances ``row[j]``), in
+    increasing order, into ``nb``; returns their number. Word by word through a bitmask
+    (the comparisons vectorise)."""
+    k = 0
+    one = np.uint64(1)
+    for w in range(lo >> 6, (N + 63) >> 6 if lo < N else 0):
+        bits = np.uint64(0)
+        rw, first = row[64 * w : min(64 * w + 64, N)], lo - 64 * w
+        for t in range(rw.shape[0]):
+            hit = (rw[t] < prm.radius2) & (t >= first)
+            bits |= np.uint64(hit) << np.uint64(t)
+        while bits != 0:
+            nb[k] = 64 * w + low_bit(bits)
+            bits &= bits - one
+            k += 1
+    return k
+
+
 @jit_kernel
 def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
     """:func:`_sweep_all_pairs` with each pair met once: UAV x against the UAVs after it
@@ -428,17 +448,7 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
                     prm, wm[j, x], cq0[j] - x0, cq1[j] - x1, dq2, cp0[j] - v0, cp1[j] - v1, dp2
                 )
                 f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
-        k = 0
-        for w in range(lo >> 6, (N + 63) >> 6 if near else 0):  # neighbours after x, in order
-            bits = np.uint64(0)
-            rw, first = row[64 * w : min(64 * w + 64, N)], lo - 64 * w
-            for t in range(rw.shape[0]):
-                hit = (rw[t] < prm.radius2) & (t >= first)
-                bits |= np.uint64(hit) << np.uint64(t)
-            while bits != 0:
-                nb[k] = 64 * w + low_bit(bits)
-                bits &= bits - one
-                k += 1
+        k = _later_neighbors(prm, row, lo, N if near else lo, nb)
         _gauss_rows(prm, row, nb, k, gauss)  # their exponentials first, vectorised
         root = find(parent, x)
         bit_x = one << np.uint64(x & 63)
