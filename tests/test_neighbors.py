@@ -103,6 +103,50 @@ def test_grid_passes_equal_all_pairs(layout, dim):
         compare_passes(cfg, q, p, K, max_cells=7)
 
 
+def reference_pair_pass(q, p, agents, partners, radius, K):
+    """The pair pass in plain numpy: np.lexsort of (squared distance, index) over the UAVs
+    other than the agent and its partner, non-finite distances left out."""
+    B, N, D = q.shape
+    M = agents.size
+    pos, vel, mask = np.zeros((B, M, K, D)), np.zeros((B, M, K, D)), np.zeros((B, M, K))
+    shared = np.zeros((B, M // 2))
+    for b in range(B):
+        d2 = np.zeros((N, N))
+        with np.errstate(invalid="ignore", over="ignore"):  # inf - inf: a NaN distance
+            for k in range(D):  # axes summed in order, as the kernels do
+                d2 = d2 + (q[b, None, :, k] - q[b, :, None, k]) ** 2
+        near = d2 < radius**2
+        for m in range(0, M, 2):
+            a, c = agents[m], agents[m + 1]
+            others = np.ones(N, bool)
+            others[[a, c]] = False
+            shared[b, m // 2] = np.sum(near[a] & near[c] & others) + 2 * near[a, c]
+        for m, (i, j) in enumerate(zip(agents, partners, strict=True)):
+            ok = np.isfinite(d2[i])
+            ok[[i, j]] = False
+            idx = np.flatnonzero(ok)
+            best = idx[np.lexsort((idx, d2[i, idx]))][:K]
+            pos[b, m, : best.size] = q[b, best] - q[b, i]
+            vel[b, m, : best.size] = p[b, best] - p[b, i]
+            mask[b, m, : best.size] = 1.0
+    return shared, pos, vel, mask
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("N", [7, 20, 150])
+@pytest.mark.parametrize("layout", ["spread", "coincident", "nonfinite"])
+def test_pair_pass_equals_a_numpy_reference(layout, N, dim):
+    rng = np.random.default_rng(N + 7 * dim)
+    q = positions(layout, rng, 3, N, dim, 8.4)
+    p = rng.normal(size=q.shape)
+    agents, partners = np.array([0, 1, 4, 2]), np.array([1, 0, 2, 4])
+    for K in (0, 3, N + 2):  # none, a few, more than there are
+        got = pair_pass(q, p, agents, partners, 8.4, K)
+        ref = reference_pair_pass(q, p, agents, partners, 8.4, K)
+        for key, r in zip(("shared", "nbr_pos", "nbr_vel", "nbr_mask"), ref, strict=True):
+            assert same(got[key], r), (key, K)
+
+
 def test_grid_flocking_trajectory_equals_all_pairs():
     """Same trajectories: 150 semi-implicit Euler steps of the flocking command."""
     rng = np.random.default_rng(5)

@@ -115,18 +115,6 @@ def insert_nearest(best_d2, best_j, K, d2, j):
         best_j[s] = j
 
 
-@jit_inline
-def k_nearest_all_pairs(q, b, i, skip, best_d2, best_j, K):
-    """K nearest UAVs of UAV i other than i and ``skip`` by scanning every UAV."""
-    reset_nearest(best_d2, best_j)
-    worst = np.inf  # best_d2[K - 1], kept in a register
-    for j in range(q.shape[1] if K > 0 else 0):
-        d2 = dist2(q, b, i, j)
-        if d2 <= worst and j != i and j != skip:
-            insert_nearest(best_d2, best_j, K, d2, j)
-            worst = best_d2[K - 1]
-
-
 # ---------------------------------------------------------------------------------------
 # grid construction
 # ---------------------------------------------------------------------------------------
@@ -366,7 +354,9 @@ def nearest_d2(q, b, i, skip, g, best, L):
 
 @jit_kernel
 def k_nearest_grid(q, b, i, skip, g, best_d2, best_j, K):
-    """:func:`k_nearest_all_pairs` on the grid: the same list, found by expanding blocks."""
+    """The K nearest UAVs of UAV i other than i and ``skip`` on the grid, found by expanding
+    blocks: the list of :func:`~pairflock_env.swarm.pair_pass._nearest_in_row` (the same K
+    smallest (squared distance, index) pairs, the rest (inf, -1))."""
     c0, c1, c2 = uav_cell(q, b, i, g)
     margin = _border_margin(q, b, i, g)
     L = 1
