@@ -10,6 +10,7 @@ import numpy as np
 
 from pairflock_env.config import PairFlockConfig
 from pairflock_env.interfaces.pair_params import PAIR_INTERFACE_SCHEMA
+from pairflock_env.kernels import all_finite
 from pairflock_env.task.observations import ObsLayout
 
 __all__ = ["LearningInterface", "check_period", "symlog"]
@@ -117,6 +118,6 @@ class LearningInterface:
         D = self.config.dim
         if a.shape != (*lead, D):
             raise ValueError(f"action has shape {a.shape}; expected {(*lead, D)}")
-        if not np.all(np.isfinite(a)):
+        if not all_finite(a):
             raise ValueError("action contains NaN or inf; actions must be finite")
         return a

@@ -179,6 +179,8 @@ class PairInterface(LearningInterface):
         rew += (cfg.dim, p.w_separation, p.separation_distance, cfg.collision_distance)
         rew += (p.w_collision, p.w_cohesion, p.cohesion_distance, p.approach_horizon)
         self._rew_prm = np.array([*rew, DIVERGENCE_PENALTY], np.float64)
+        #: the reward kernel's flags (use the approach, n_uavs > 2), by whether to use it
+        self._rew_flags = {a: np.array([a, cfg.n_uavs > 2], np.bool_) for a in (False, True)}
         self._dims = (0,) * self.config.dim
 
     def encode(self, obs: np.ndarray) -> np.ndarray:
@@ -230,14 +232,16 @@ class PairInterface(LearningInterface):
         rows = _rows(self._check_obs_shape(obs)) if approach else np.zeros((1, self.layout.size))
         log_err = np.log1p(err / p.error_scale)  # numpy's logarithm (pair_kernels' docstring)
         diverged = np.asarray(info["diverged"], dtype=bool)
-        if diverged.shape != lead:  # per swarm: every agent of a diverged swarm
+        if diverged.shape == lead[:-1]:  # per swarm: every agent of a diverged swarm
+            diverged = np.repeat(diverged, lead[-1])
+        elif diverged.shape != lead:
             diverged = diverged.reshape(diverged.shape + (1,) * (err.ndim - diverged.ndim))
             diverged = np.broadcast_to(diverged, lead)
         if sep.shape != lead:
             sep = np.broadcast_to(sep, lead)
         a = np.asarray(action, dtype=np.float64).reshape(-1, cfg.dim)
         out = np.empty(err.size)
-        flags = np.array([approach, cfg.n_uavs > 2], np.bool_)
+        flags = self._rew_flags[approach]
         reward_rows(
             log_err.reshape(-1), err.reshape(-1), sep.reshape(-1), a,
             diverged.reshape(-1), rows, self._rew_at, self._rew_prm, flags, self._dims, out,
