@@ -8,12 +8,7 @@ import pytest
 
 from pairflock_env import PairFlockCore, make_config
 from pairflock_env.config import corner_diagonals
-from pairflock_env.swarm.flocking import (
-    _SLOT_EDGES,
-    flocking_params,
-    flocking_pass,
-    flocking_runner,
-)
+from pairflock_env.swarm.flocking import flocking_params, flocking_pass
 from pairflock_env.swarm.grid import (
     GridArrays,
     NeighborGrid,
@@ -106,35 +101,6 @@ def test_grid_passes_equal_all_pairs(layout, dim):
             assert (grid.arrays.n_ring == 3**dim).all() and not grid.arrays.wrap.any()
         # few buckets: far cells share buckets, and every answer stays the same
         compare_passes(cfg, q, p, K, max_cells=7)
-
-
-@pytest.mark.parametrize("layout", ["spread", "clustered", "coincident"])
-def test_grid_union_find_either_way_gives_the_all_pairs_components(layout):
-    """The grid sweep joins by slot while sparse and by index once dense (from its last
-    sweep's neighbour count, ``_edges``): both give all pairs' largest component, and the
-    count is the number of ordered neighbour pairs."""
-    rng = np.random.default_rng(3)
-    B, N, D = 3, 600, 2
-    cfg = make_config("paper", n_uavs=N, pairs=((0, 1),))
-    q = positions(layout, rng, B, N, D, cfg.radius)
-    q[1] *= 0.02  # a dense swarm: tens of neighbours each
-    p = rng.normal(size=(B, N, D))
-    partner = np.full(N, -1, np.int64)
-    partner[[0, 1]] = [1, 0]
-    args = (q, p, np.zeros((B, D)), np.zeros((B, D)), np.ones((B, N)), partner)
-    prm = flocking_params(cfg)
-    ref = flocking_pass(prm, *args)
-    grid = NeighborGrid(B, N, D, max(cfg.radius, cfg.collision_distance)).build(q)
-    run = flocking_runner(prm, q.shape, grid)
-    d2 = ((q[:, :, None, :] - q[:, None, :, :]) ** 2).sum(-1)
-    pairs = ((d2 < cfg.radius**2).sum(axis=(1, 2)) - N).tolist()
-    for edges in (0, _SLOT_EDGES * N):  # by slot, then by index
-        run.out["_edges"][:] = edges
-        got = run(*args)
-        assert got["largest_component"].tolist() == ref["largest_component"].tolist()
-        assert got["_edges"].tolist() == pairs
-        assert same(got["acc"], ref["acc"])
-    assert pairs[1] >= _SLOT_EDGES * N  # the dense swarm would join by index next
 
 
 def reference_pair_pass(q, p, agents, partners, radius, K):

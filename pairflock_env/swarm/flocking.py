@@ -287,13 +287,11 @@ def _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2):
 
 
 @jit_inline
-def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor, ellipse, by_slot):
+def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor, ellipse):
     """UAV x (in slot s) against the candidate list (indices in increasing order, every
     UAV within reach of x among them, x too): x's separation and flocking command, and
-    its edges of the interaction graph (to its neighbours of larger index, or with
-    ``by_slot`` in later slots: :func:`_sweep_grid` says when); returns the collisions seen
-    from x (inside the sphere of collision_distance, or with ``ellipse`` the collision
-    ellipsoid) and its number of neighbours.
+    its edges of the interaction graph; returns the collisions seen from x (inside the
+    sphere of collision_distance, or with ``ellipse`` the collision ellipsoid).
 
     UAV x gathers its own command: the pinning term, then f_xj of each neighbour j in
     increasing j. That is the order in which the symmetric sweep of the equations (f_ij
@@ -321,10 +319,12 @@ def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor, ellipse, by_slot):
             hit = _ellipse_hit(prm, fw[CQ, c] - x0, fw[CQ + 1, c] - x1, fw[CQ + 2, c] - x2)
             nc += hit & (c != sx)
     fw[MD, s] = bits_float(m)
-    k = 0
+    k = first = 0
     for c in range(n):  # the neighbours, in increasing index (branch-free)
         nb[k] = c
         k += row[c] < prm.radius2
+    for t in range(k):  # those before x
+        first += nb[t] < sx
     gauss = fw[EXP]
     _gauss_rows(prm, row, nb, k, gauss)  # the exponentials first, vectorised
     f0, f1, f2 = fw[ACC, s], fw[ACC + 1, s], fw[ACC + 2, s] if three else 0.0
@@ -338,24 +338,16 @@ def _gather_uav(s, x, n, prm, fw, fwu, iw, three, floor, ellipse, by_slot):
         g = _weighted_force(prm, w, dq0, dq1, dq2, dp0, dp1, dp2)
         f0, f1, f2 = f0 + g[0], f1 + g[1], f2 + g[2]
     fw[ACC, s], fw[ACC + 1, s], fw[ACC + 2, s] = f0, f1, f2
-    # the interaction graph over slots, each edge once (either way the same partition)
-    parent, size, cslot = iw[PARENT], iw[SIZE], iw[CSLOT]
-    lo = hi = 0
-    if by_slot:  # to the neighbours in later slots, their slots compacted into nb (branch-free;
-        for t in range(k):  # nb[hi] is written once read: hi <= t)
-            sj = cslot[nb[t]]
-            nb[hi] = sj
-            hi += sj > s
-    else:  # to the neighbours of larger index, which follow x in the candidate list
-        for t in range(k):
-            lo += nb[t] < sx
-        hi = k
+    parent, size = iw[PARENT], iw[SIZE]
+    # the interaction graph (over slots), each edge once: from x to the neighbours of
+    # larger index, which follow x in the candidate list
     root = find(parent, s)
-    for t in range(lo, hi):
-        sj = nb[t] if by_slot else cslot[nb[t]]
+    cslot = iw[CSLOT]
+    for t in range(first, k):
+        sj = cslot[nb[t]]
         if parent[sj] != root:  # (a child of x's root: joined already, join would say so)
             root = join(parent, size, root, sj)
-    return nc, k
+    return nc
 
 
 @jit_kernel
@@ -369,7 +361,7 @@ def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
     gather(N, fw, iw, three)
     nc = 0
     for x in range(N):
-        nc += _gather_uav(x, x, N, prm, fw, fwu, iw, three, floor, ellipse, False)[0]
+        nc += _gather_uav(x, x, N, prm, fw, fwu, iw, three, floor, ellipse)
     put_slots(b, iw[ORDER], acc, min_d2, fw, three)
     return nc // 2  # each pair was seen from both sides
 
@@ -478,22 +470,13 @@ def _sweep_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, wm, lb, dims):
 
 
 @jit_kernel
-def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, edges, dims):
+def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, dims):
     """:func:`_sweep_all_pairs` on the grid, cell by cell: the UAVs of a cell share one
     candidate list (its one-ring, put in index order once), and UAVs, candidates and the
     union-find forest are all held in slot (cell) order, so that memory follows space
-    whatever the indices. The same results.
-
-    The union-find joins each UAV to its neighbours in later slots while the swarm is
-    sparse, to those of larger index once it is dense: the sweep goes in slot order, so
-    later slots are the neighbours not yet visited whatever the indices (joins that go the
-    same way every time), at the price of compacting each UAV's neighbours, which a dense
-    flock's long lists do not repay. ``edges[b]``: the neighbour count of swarm b's last
-    sweep (kept for the next), which decides: sparse below ``_SLOT_EDGES`` per UAV."""
+    whatever the indices. The same results."""
     three, floor, ellipse = _three(dims), _floor(dims), _ellipse(dims)
     N = q.shape[1]
-    by_slot = edges[b] < _SLOT_EDGES * N
-    n_edges = 0
     order = g.order[b]
     copy_slots(q, p, b, order, partner, acc, fw, iw, three)
     cidx = iw[CIDX]
@@ -522,11 +505,8 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, edges, dims)
         sort_indices(cidx, n, iw[TMP], iw[HIST], g.mark, N)
         gather(n, fw, iw, three)
         for s2 in range(s, end):
-            res = _gather_uav(s2, order[s2], n, prm, fw, fwu, iw, three, floor, ellipse, by_slot)
-            nc += res[0]
-            n_edges += res[1]
+            nc += _gather_uav(s2, order[s2], n, prm, fw, fwu, iw, three, floor, ellipse)
         s = end
-    edges[b] = n_edges
     put_slots(b, order, acc, min_d2, fw, three)
     # the one-ring proves separations shorter than a cell; the others need a wider search
     bound = ring_bound2(g, 1)
@@ -537,7 +517,7 @@ def _sweep_grid(q, p, partner, prm, b, g, acc, min_d2, fw, fwu, iw, edges, dims)
 
 
 @jit_kernel
-def _flock_swarms(q, p, ql, pl, h, partner, prm, out, fw, fwu, iw, wm, lb, edges, g, dims):
+def _flock_swarms(q, p, ql, pl, h, partner, prm, out, fw, fwu, iw, wm, lb, g, dims):
     """Every swarm: grid pass where ``g`` holds the swarm, all pairs otherwise. ``dims``:
     a tuple of ``dim`` entries, so that each dimension compiles its own kernels."""
     acc, min_d2, n_coll, lcc, bad, vmis, vmax = out
@@ -547,7 +527,7 @@ def _flock_swarms(q, p, ql, pl, h, partner, prm, out, fw, fwu, iw, wm, lb, edges
         _velocity_mismatch(p, pl, partner, n_unpaired, b, vmis, vmax)
         bad[b] = _start_swarm(q, p, ql, pl, h, prm, b, acc, min_d2, parent, size)
         if g is not None and g.ok[b]:
-            args = (acc, min_d2, fw, fwu, iw, edges, dims)
+            args = (acc, min_d2, fw, fwu, iw, dims)
             n_coll[b] = _sweep_grid(q, p, partner, prm, b, g, *args)
         elif wm.shape[0] >= q.shape[1]:
             args = (acc, min_d2, fw, fwu, iw, wm, lb, dims)
@@ -567,20 +547,16 @@ def _flocking_kernel(q, p, ql, pl, h, prt, prm, dims, acc, md2, nc, lcc, bad, vm
 
 @jit_kernel
 def _flocking_grid_kernel(
-    q, p, ql, pl, h, prt, prm, dims, acc, md2, nc, lcc, bad, vm, vx, fw, fu, iw, wm, lb, ed, *grid
+    q, p, ql, pl, h, prt, prm, dims, acc, md2, nc, lcc, bad, vm, vx, fw, fu, iw, wm, lb, *grid
 ):
     out = (acc, md2, nc, lcc, bad, vm, vx)
     g = GridArrays(*grid)
-    _flock_swarms(q, p, ql, pl, h, prt, _scalars(prm), out, fw, fu, iw, wm, lb, ed, g, dims)
+    _flock_swarms(q, p, ql, pl, h, prt, _scalars(prm), out, fw, fu, iw, wm, lb, g, dims)
 
 
 #: the outputs of a pass, in the kernels' order
 _FLOCK_KEYS = ("acc", "min_d2", "collisions", "largest_component", "diverged")
 _FLOCK_KEYS += ("velocity_mismatch", "velocity_mismatch_max", "_fw", "_fwu", "_iw", "_wm", "_lb")
-_FLOCK_KEYS += ("_edges",)
-#: below this many neighbours per UAV (in its last sweep) a grid sweep's union-find joins
-#: by slot, from this many on by index (:func:`_sweep_grid`)
-_SLOT_EDGES = 16
 #: all pairs meet each pair once (:func:`_sweep_pairs`) up to this many UAVs, whose N x N
 #: weights take 2 MB; beyond, each UAV meets the others in turn (:func:`_sweep_all_pairs`)
 _PAIRS_MAX = 512
@@ -667,7 +643,6 @@ def flocking_runner(
         n_wm = N if grid is None and N <= _PAIRS_MAX else 0  # (the grid's fallback: rows)
         out["_wm"] = np.zeros((n_wm, n_wm))
         out["_lb"] = np.zeros((n_wm, words), np.uint64)
-        out["_edges"] = np.zeros(B, np.int64)  # (see _sweep_grid)
     dims = _DIMS[D, bool(params[_F.floor_radius2] > 0), ellipse]
     tail = (params, dims, *(out[k] for k in _FLOCK_KEYS))
     if grid is None:
