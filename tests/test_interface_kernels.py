@@ -74,3 +74,10 @@ def test_pair_interface_kernels_equal_numpy(dim, case, n_uavs):
     }
     for o in (obs, None):
         assert same(itf.reward(None, info, action, o), ref.reward(itf, info, action, o))
+    # one row: scalar infos (a swarm's divergence flag with its row's error and separation)
+    row = {k: v[1, 2] if k != "diverged" else v[1] for k, v in info.items()}
+    whole = itf.reward(None, info, action, obs)
+    assert same(itf.reward(None, row, action[1, 2], obs[1, 2]), whole[1, 2])
+    # per-row divergence flags give what the per-swarm ones give
+    per_row = dict(info, diverged=np.repeat(info["diverged"], M).reshape(B, M))
+    assert same(itf.reward(None, per_row, action, obs), whole)

@@ -232,7 +232,7 @@ class PairInterface(LearningInterface):
         rows = _rows(self._check_obs_shape(obs)) if approach else np.zeros((1, self.layout.size))
         log_err = np.log1p(err / p.error_scale)  # numpy's logarithm (pair_kernels' docstring)
         diverged = np.asarray(info["diverged"], dtype=bool)
-        if diverged.shape == lead[:-1]:  # per swarm: every agent of a diverged swarm
+        if lead and diverged.shape == lead[:-1]:  # per swarm: every agent of a diverged swarm
             diverged = np.repeat(diverged, lead[-1])
         elif diverged.shape != lead:
             diverged = diverged.reshape(diverged.shape + (1,) * (err.ndim - diverged.ndim))
