@@ -370,7 +370,9 @@ def _sweep_all_pairs(q, p, partner, prm, b, acc, min_d2, fw, fwu, iw, dims):
 def _later_neighbors(prm, row, lo, N, nb):
     """The UAVs j in [lo, N) closer than the radius (squared distances ``row[j]``), in
     increasing order, into ``nb``; returns their number. Word by word through a bitmask
-    (the comparisons vectorise)."""
+    (the comparisons vectorise): on these rows of up to N = 512 it beats the branch-free
+    compaction :func:`_gather_uav` uses on its short candidate lists (that compaction here
+    made the flocking pass ~10 % slower at N = 80, B = 32)."""
     k = 0
     one = np.uint64(1)
     for w in range(lo >> 6, (N + 63) >> 6 if lo < N else 0):

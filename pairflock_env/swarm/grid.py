@@ -414,6 +414,16 @@ def bitmap_sort(a, n, mark, lo, hi):
 
 
 @jit_inline
+def word_span(a, n):
+    """The first and last 64-bit words of a bitmap that hold the indices a[:n] (n >= 1)."""
+    lo = hi = a[0]
+    for t in range(n):
+        lo = min(lo, a[t])
+        hi = max(hi, a[t])
+    return lo >> 6, hi >> 6
+
+
+@jit_inline
 def order_indices(a, n, mark):
     """Put the indices a[:n] in increasing order and return how many are distinct: an
     insertion sort for short lists (distinct indices), else :func:`bitmap_sort`, whose cost
@@ -421,11 +431,8 @@ def order_indices(a, n, mark):
     if n <= _SORT_BITMAP:
         sort_ints(a, n)
         return n
-    lo = hi = a[0]
-    for t in range(n):
-        lo = min(lo, a[t])
-        hi = max(hi, a[t])
-    return bitmap_sort(a, n, mark, lo >> 6, hi >> 6)
+    lo, hi = word_span(a, n)
+    return bitmap_sort(a, n, mark, lo, hi)
 
 
 @jit_inline

@@ -9,7 +9,7 @@ velocities and the forest a sweep touches lie in memory as the UAVs lie in space
 from __future__ import annotations
 
 from pairflock_env.kernels import jit_inline
-from pairflock_env.swarm.grid import bitmap_sort
+from pairflock_env.swarm.grid import bitmap_sort, word_span
 
 __all__ = [
     "copy_slots",
@@ -58,11 +58,7 @@ def sort_indices(a, n, tmp, hist, mark, n_max):
         for i in range(n):
             a[i] = tmp[i]
         return
-    lo, hi = a[0], a[0]
-    for c in range(n):
-        lo = min(lo, a[c])
-        hi = max(hi, a[c])
-    lo, hi = lo >> 6, hi >> 6
+    lo, hi = word_span(a, n)
     bits = 1
     while (n_max - 1) >> bits > 0:
         bits += 1
